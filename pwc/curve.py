@@ -1,0 +1,279 @@
+"""The compiled pw-curve and its vectorized evaluation (Listing 15.5's ``point_along_pwc``).
+
+A :class:`Curve` holds the MDL array of Listing 15.2 as numpy columns, one row per
+pw_point.  Evaluation is exact on arcs: the angle, not a polyline, is interpolated.
+
+Within each piece the parameter ``s`` is proportional to arc length (segments are
+linear in ``s``; arcs are linear in angle, hence in length), so ``s * length`` *is*
+the arc length from the start and the inverse mapping is exact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+from functools import cached_property
+
+import numpy as np
+
+__all__ = ["PwType", "Curve", "point_along_pwc"]
+
+
+class PwType(IntEnum):
+    """Listing 15.1's ``pw_type``, in enum order (the NPZ ``type`` column uses these ints)."""
+
+    SEGMENT = 0
+    ANGLE = 1
+    SAGITTA = 2
+    CYMA_RECTA = 3
+    CYMA_REVERSA = 4
+    FLARE = 5
+
+    @property
+    def mdl_name(self) -> str:
+        return ("segment", "angle", "sagitta", "cyma_recta", "cyma_reversa", "flare")[self]
+
+
+@dataclass(frozen=True, eq=False)
+class Curve:
+    """A compiled pwc-list: the ``pw_point`` array of Listing 15.2 as columns.
+
+    Parameters
+    ----------
+    type : (N,) int8
+        :class:`PwType` of the piece that *ends* at each point (the first is a segment).
+    t : (N,) float64
+        Cumulative arc length at each point over the total, 0 first, 1 last, strictly
+        increasing.
+    pt, center : (N, 2) float64
+        Point, and the centre of the arc ending at it (zero for segments).
+    radius, start_angle, end_angle : (N,) float64
+        The arc's radius and angles in radians; the arc's point at angle φ is
+        ``center + radius * (cos φ, sin φ)``, φ interpolated linearly in the piece.
+    length : float
+        Total length of the normalized curve (the Handbook's ``NAME_length``).
+    scale : float
+        The normalization factor applied to the source coordinates.
+    line : (N,) int
+        1-based source line of each point (a cyma's two points share one line).
+    text : tuple of str
+        Source line of each point, without its comment.
+    """
+
+    name: str
+    type: np.ndarray
+    t: np.ndarray
+    pt: np.ndarray
+    center: np.ndarray
+    radius: np.ndarray
+    start_angle: np.ndarray
+    end_angle: np.ndarray
+    length: float
+    scale: float = 1.0
+    relative: bool = False
+    source: str = "<string>"
+    line: np.ndarray = field(default=None)  # type: ignore[assignment]
+    text: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        if self.line is None:
+            object.__setattr__(self, "line", np.zeros(n, dtype=np.int64))
+        if n < 2:
+            raise ValueError("a Curve needs at least two points")
+        if not np.all(np.diff(self.t) > 0):
+            raise ValueError("Curve.t must be strictly increasing")
+        for name in ("t", "pt", "center", "radius", "start_angle", "end_angle"):
+            a = getattr(self, name)
+            a.setflags(write=False)
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"Curve.{name} holds a non-finite value")
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def n(self) -> int:
+        """Number of pw_points (the MDL array size)."""
+        return len(self.t)
+
+    @property
+    def is_arc(self) -> np.ndarray:
+        """(N,) bool: the piece ending at each point is an arc."""
+        return self.type != PwType.SEGMENT
+
+    @property
+    def is_closed(self) -> bool:
+        """True when the last point equals the first (a sweep curve for ``double_pwc``)."""
+        return bool(np.allclose(self.pt[0], self.pt[-1], rtol=0, atol=1e-12))
+
+    @cached_property
+    def bbox(self) -> np.ndarray:
+        """(2, 2) [[xmin, ymin], [xmax, ymax]] of the exact curve, arcs included."""
+        s, pts = self.polyline(np.inf)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        # extreme points of arcs: angles that are multiples of pi/2 inside each sweep
+        for i in np.flatnonzero(self.is_arc):
+            a0, a1 = self.start_angle[i], self.end_angle[i]
+            k = np.arange(np.ceil(min(a0, a1) / (np.pi / 2)), np.floor(max(a0, a1) / (np.pi / 2)) + 1)
+            if len(k):
+                phi = k * np.pi / 2
+                p = self.center[i] + self.radius[i] * np.stack([np.cos(phi), np.sin(phi)], -1)
+                lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
+        return np.stack([lo, hi])
+
+    # -- the piece table: every piece as p(f) = a + b f + r (cos(phi0 + dphi f), sin(...)) --
+    @cached_property
+    def _tables64(self) -> tuple[np.ndarray, ...]:
+        """``(t, a, b, r, phi0, dphi, t0, inv_dt)`` indexed by a piece's end point i.
+
+        Segments have r = 0 and b = pt[i] - pt[i-1]; arcs have a = centre, b = 0, so one
+        branch-free formula evaluates both exactly.  Row 0 is the constant first point
+        (where ``s < 0`` lands).
+        """
+        arc = self.is_arc
+        prev = np.roll(self.pt, 1, axis=0)
+        a = np.where(arc[:, None], self.center, prev)
+        b = np.where(arc[:, None], 0.0, self.pt - prev)
+        r = np.where(arc, self.radius, 0.0)
+        phi0 = np.where(arc, self.start_angle, 0.0)
+        dphi = np.where(arc, self.end_angle - self.start_angle, 0.0)
+        t0 = np.roll(self.t, 1)
+        inv_dt = 1.0 / np.diff(self.t, prepend=-1.0)
+        a[0], b[0], t0[0] = self.pt[0], 0.0, 0.0
+        r[0] = phi0[0] = dphi[0] = inv_dt[0] = 0.0
+        return self.t, a, b, r, phi0, dphi, t0, inv_dt
+
+    @cached_property
+    def _tables32(self) -> tuple[np.ndarray, ...]:
+        """The tables rounded to float32, as an MDL renderer holds them."""
+        return tuple(x.astype(np.float32) for x in self._tables64)
+
+    def _locate(self, s: np.ndarray, tables) -> tuple[np.ndarray, np.ndarray]:
+        """Piece index (first point whose t exceeds s) and fraction f in [0, 1]."""
+        if not np.all(np.isfinite(s)):
+            raise ValueError("curve position s must be finite (got NaN or infinity)")
+        t, *_, t0, inv_dt = tables
+        i = np.searchsorted(t, s, side="right")  # Listing 15.5: first i with s < t[i]
+        last = i >= len(t)  # s >= 1: the last point
+        i[last] = len(t) - 1
+        f = (s - t0[i]) * inv_dt[i]
+        f[last] = 1.0
+        return i, np.clip(f, 0.0, 1.0, out=f)  # s < 0 lands on row 0, the first point
+
+    def evaluate(self, s, repeat: float | None = None) -> np.ndarray:
+        """Points on the curve at positions ``s`` in [0, 1] (Listing 15.5).
+
+        Parameters
+        ----------
+        s : array_like of any shape
+            Curve position; ``s < 0`` gives the first point and ``s >= 1`` the last.
+            A float32 array is evaluated in float32 throughout (tables included), as
+            an MDL renderer would; anything else in float64.
+        repeat : float, optional
+            Listing 14.27's repetition: the curve is evaluated at ``frac(s * repeat)``
+            and, when ``repeat != 1``, shrunk by ``repeat`` and offset along y (the run)
+            by ``floor(s * repeat) / repeat``.  As in the Handbook, ``repeat=1`` wraps
+            ``s = 1`` to the first point.
+
+        Returns
+        -------
+        (*s.shape, 2) array of s's float type
+
+        Examples
+        --------
+        >>> from pwc import compile_text
+        >>> c = compile_text("0 0\n1 0\n1 1 :angle 90")
+        >>> c.evaluate([-1.0, 0.0, 1.0, 2.0]).round(12).tolist()
+        [[0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [1.0, 1.0]]
+        """
+        s = np.asarray(s)
+        s = s.astype(np.float32 if s.dtype == np.float32 else np.float64, copy=False)
+        if repeat is not None:
+            return self._evaluate_repeat(s, repeat)
+        tables = self._tables32 if s.dtype == np.float32 else self._tables64
+        i, f = self._locate(np.atleast_1d(s), tables)
+        _, a, b, r, phi0, dphi, *_ = tables
+        phi = phi0[i] + dphi[i] * f
+        out = a[i] + b[i] * f[..., None]
+        rr = r[i]
+        out[..., 0] += rr * np.cos(phi)
+        out[..., 1] += rr * np.sin(phi)
+        return out.reshape(*s.shape, 2)
+
+    def _evaluate_repeat(self, s: np.ndarray, repeat: float) -> np.ndarray:
+        if not (np.isfinite(repeat) and repeat > 0):
+            raise ValueError(f"repeat must be a positive finite number, got {repeat}")
+        sr = s * repeat
+        p = self.evaluate(sr - np.floor(sr))
+        if repeat != 1.0:
+            p /= repeat
+            p[..., 1] += np.floor(sr) / repeat
+        return p
+
+    def derivative(self, s) -> np.ndarray:
+        """d point / d s at ``s`` (magnitude ``length`` inside pieces; one-sided at knots).
+
+        At a knot the derivative is that of the piece that *starts* there (the piece
+        Listing 15.5 selects); at ``s >= 1`` it is the end of the last piece.
+        """
+        s = np.asarray(s, dtype=np.float64)
+        tables = self._tables64
+        i, f = self._locate(np.atleast_1d(s), tables)
+        i = np.maximum(i, 1)  # s < 0: derivative of the first piece
+        _, a, b, r, phi0, dphi, _, inv_dt = tables
+        phi = phi0[i] + dphi[i] * f
+        k = (r[i] * dphi[i] * inv_dt[i])[..., None]
+        d = b[i] * inv_dt[i][..., None] + k * np.stack([-np.sin(phi), np.cos(phi)], -1)
+        return d.reshape(*s.shape, 2)
+
+    def tangent(self, s) -> np.ndarray:
+        """Unit tangent at ``s`` (direction of increasing s)."""
+        d = self.derivative(s)
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def arc_length(self, s) -> np.ndarray:
+        """Arc length from the start to position ``s`` (exact: ``s`` is arc-length linear)."""
+        return np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0) * self.length
+
+    def position_at_length(self, length) -> np.ndarray:
+        """The curve position ``s`` at a given arc length from the start (inverse of
+        :meth:`arc_length`)."""
+        return np.clip(np.asarray(length, dtype=np.float64) / self.length, 0.0, 1.0)
+
+    def polyline(self, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+        """Sample the curve as a polyline whose chords deviate at most ``tolerance``.
+
+        Every pw_point is included exactly; each arc is split into equal-angle steps
+        whose sagitta ``r (1 - cos(step / 2))`` is at most ``tolerance``.
+
+        Returns
+        -------
+        s : (m,) float64
+            Curve positions of the samples (strictly increasing, first 0, last 1).
+        points : (m, 2) float64
+        """
+        if not tolerance > 0:
+            raise ValueError(f"tolerance must be positive, got {tolerance}")
+        sweep = np.abs(self.end_angle - self.start_angle)
+        ratio = np.clip(1.0 - tolerance / np.maximum(self.radius, 1e-300), -1.0, 1.0)
+        step = 2.0 * np.arccos(ratio)  # largest angle step within tolerance
+        counts = np.where(self.is_arc, np.ceil(sweep / np.maximum(step, 1e-12)), 1)
+        counts = np.clip(counts, 1, 1 << 20).astype(np.int64)
+        counts[0] = 0
+        # s samples: each piece contributes counts[i] samples ending at t[i]
+        piece = np.repeat(np.arange(len(self.t)), counts)
+        k = np.arange(len(piece)) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+        t0 = np.roll(self.t, 1)
+        s = t0[piece] + (self.t[piece] - t0[piece]) * k / counts[piece]
+        s = np.concatenate([[0.0], s])
+        knots = np.concatenate([[0], np.cumsum(counts[1:])])
+        s[knots] = self.t
+        pts = self.evaluate(s)
+        pts[knots] = self.pt  # pw-points exactly, not recomputed from their arcs
+        return s, pts
+
+
+def point_along_pwc(curve_position, pwc: Curve, repeat: float | None = None) -> np.ndarray:
+    """The Handbook's name for :meth:`Curve.evaluate` (Listing 15.5)."""
+    return pwc.evaluate(curve_position, repeat)
