@@ -18,11 +18,7 @@ from pwc.tolerance import TOL
 
 __all__ = ["compile_list", "arc_through", "resolve_points"]
 
-_PROP_TYPE = {
-    None: PwType.SEGMENT, "angle": PwType.ANGLE, "sag": PwType.SAGITTA,
-    "cyma_recta": PwType.CYMA_RECTA, "cyma_reversa": PwType.CYMA_REVERSA,
-    "flare": PwType.FLARE,
-}
+_BULGE_60 = math.tan(math.pi / 12)  # a cyma's arcs each sweep 60 degrees
 
 
 def resolve_points(tree: PwcList) -> np.ndarray:
@@ -37,32 +33,33 @@ def resolve_points(tree: PwcList) -> np.ndarray:
     return out
 
 
-def arc_through(a, b, sweep: float) -> tuple[tuple[float, float], float, float, float]:
-    """The circular arc from ``a`` to ``b`` turning through signed ``sweep`` radians.
+def arc_through(a, b, bulge: float) -> tuple[tuple[float, float], float, float, float]:
+    """The circular arc from ``a`` to ``b`` with the given bulge ``tan(sweep / 4)``.
 
-    Positive is counter-clockwise (centre left of the chord a→b).  Returns
-    ``(center, radius, start_angle, end_angle)`` with ``start_angle`` in (-pi, pi] and
-    ``end_angle = start_angle + sweep``.
+    A positive bulge turns counter-clockwise (for a minor arc the centre lies left of
+    the chord a→b).  The bulge, not the sweep, is the argument because it keeps full
+    precision for nearly flat and nearly closed arcs alike: ``|bulge|`` is twice the
+    sagitta over the chord.  Returns ``(center, radius, start_angle, end_angle)`` with
+    ``start_angle`` in (-pi, pi] and ``end_angle = start_angle + sweep``.
 
     Examples
     --------
-    >>> c, r, a0, a1 = arc_through((1.0, 0.0), (0.0, 1.0), math.pi / 2)
-    >>> [round(v, 12) for v in (*c, r, a0, a1)]
-    [0.0, 0.0, 1.0, 0.0, 1.570796326796]
+    >>> c, r, a0, a1 = arc_through((1.0, 0.0), (0.0, 1.0), math.tan(math.pi / 8))
+    >>> [round(v, 9) + 0.0 for v in (*c, r, a0, a1)]
+    [0.0, 0.0, 1.0, 0.0, 1.570796327]
     """
     ax, ay = a
     bx, by = b
     wx, wy = bx - ax, by - ay
     chord = math.hypot(wx, wy)
-    half = 0.5 * sweep
-    h = 0.5 * math.cos(half) / math.sin(half)  # centre offset along the left normal / chord
+    h = (1.0 - bulge * bulge) / (4.0 * bulge)  # centre offset along the left normal / chord
     cx = 0.5 * (ax + bx) - wy * h
     cy = 0.5 * (ay + by) + wx * h
-    radius = chord / (2.0 * abs(math.sin(half)))
+    radius = chord * (1.0 + bulge * bulge) / (4.0 * abs(bulge))
     start = math.atan2(ay - cy, ax - cx)
     if start <= -math.pi:
         start = math.pi
-    return (cx, cy), radius, start, start + sweep
+    return (cx, cy), radius, start, start + 4.0 * math.atan(bulge)
 
 
 def _end_direction(row: dict) -> tuple[float, float]:
@@ -99,16 +96,16 @@ class _Builder:
                        length=radius * abs(end - start))
         self.rows.append(row)
 
-    def arc(self, kind: PwType, p: PwPoint, a, b, sweep: float) -> None:
+    def arc(self, kind: PwType, p: PwPoint, a, b, bulge: float) -> None:
         """Emit an arc, or a segment (with a warning) when it is flatter than precision."""
-        if math.tan(abs(sweep) / 4.0) / 2.0 < TOL.flat_arc_rel:
-            chord = math.hypot(b[0] - a[0], b[1] - a[1])
+        if abs(bulge) / 2.0 < TOL.flat_arc_rel:  # sagitta / chord
+            sag = math.hypot(b[0] - a[0], b[1] - a[1]) * abs(bulge) / 2.0
             self.diag("warning", p, "this arc is so flat that it is compiled as a straight "
-                      f"segment (it deviates from its chord by {chord * math.tan(abs(sweep) / 4) / 2:.3g})",
+                      f"segment (it deviates from its chord by {sag:.3g})",
                       "use a larger angle or sagitta, or drop the property")
             self.row(PwType.SEGMENT, p, a, b)
         else:
-            self.row(kind, p, a, b, arc_through(a, b, sweep))
+            self.row(kind, p, a, b, arc_through(a, b, bulge))
 
     def build(self) -> None:
         pts, tree = self.pts, self.tree
@@ -148,7 +145,7 @@ class _Builder:
                       "compiled as a straight segment", "drop ':angle', or use a larger angle")
             self.row(PwType.SEGMENT, p, a, b)
         else:
-            self.arc(PwType.ANGLE, p, a, b, math.radians(p.arg))
+            self.arc(PwType.ANGLE, p, a, b, math.tan(math.radians(p.arg) / 4.0))
 
     def _sag(self, p: PwPoint, a, b) -> None:
         if p.arg == 0.0:
@@ -156,19 +153,18 @@ class _Builder:
             self.row(PwType.SEGMENT, p, a, b)
             return
         chord = math.hypot(b[0] - a[0], b[1] - a[1])
-        sweep = math.copysign(4.0 * math.atan(2.0 * abs(p.arg) / chord), p.arg)
-        self.arc(PwType.SAGITTA, p, a, b, sweep)
+        self.arc(PwType.SAGITTA, p, a, b, 2.0 * p.arg / chord)
 
-    def _cyma(self, p: PwPoint, a, b, first_sweep: float, kind: PwType) -> None:
+    def _cyma(self, p: PwPoint, a, b, first_bulge: float, kind: PwType) -> None:
         m = (0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]))
-        self.row(kind, p, a, m, arc_through(a, m, first_sweep))
-        self.row(kind, p, m, b, arc_through(m, b, -first_sweep))
+        self.row(kind, p, a, m, arc_through(a, m, first_bulge))
+        self.row(kind, p, m, b, arc_through(m, b, -first_bulge))
 
     def _cyma_recta(self, p: PwPoint, a, b) -> None:
-        self._cyma(p, a, b, math.pi / 3, PwType.CYMA_RECTA)  # convex (ccw) first
+        self._cyma(p, a, b, _BULGE_60, PwType.CYMA_RECTA)  # convex (ccw) first
 
     def _cyma_reversa(self, p: PwPoint, a, b) -> None:
-        self._cyma(p, a, b, -math.pi / 3, PwType.CYMA_REVERSA)  # concave (cw) first
+        self._cyma(p, a, b, -_BULGE_60, PwType.CYMA_REVERSA)  # concave (cw) first
 
     def _flare(self, p: PwPoint, a, b) -> None:
         if len(self.rows) < 2:
@@ -189,7 +185,10 @@ class _Builder:
                           "tangent line: no circle tangent there passes through it",
                           "move the point off the line of the previous piece")
             return
-        self.arc(PwType.FLARE, p, a, b, 2.0 * math.atan2(cross, dot))
+        # the sweep is twice the tangent-chord angle alpha; bulge = tan(alpha / 2)
+        w = math.hypot(wx, wy)
+        bulge = cross / (w + dot) if dot >= 0 else (w - dot) / cross
+        self.arc(PwType.FLARE, p, a, b, bulge)
 
 
 def compile_list(tree: PwcList, name: str = "curve",

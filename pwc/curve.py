@@ -125,21 +125,22 @@ class Curve:
     # -- the piece table: every piece as p(f) = a + b f + r (cos(phi0 + dphi f), sin(...)) --
     @cached_property
     def _tables64(self) -> tuple[np.ndarray, ...]:
-        """``(t, a, b, r, phi0, dphi, t0, inv_dt)`` indexed by a piece's end point i.
+        """``(t, a, b, r, phi0, dphi, t0, inv_dt)``; rows 1..N-1 are the pieces, indexed
+        by their end point.
 
         Segments have r = 0 and b = pt[i] - pt[i-1]; arcs have a = centre, b = 0, so one
         branch-free formula evaluates both exactly.  Row 0 is the constant first point
-        (where ``s < 0`` lands).
+        (``s < 0``) and row N the constant last point (``s >= 1``), as Listing 15.5 returns.
         """
         arc = self.is_arc
         prev = np.roll(self.pt, 1, axis=0)
-        a = np.where(arc[:, None], self.center, prev)
-        b = np.where(arc[:, None], 0.0, self.pt - prev)
-        r = np.where(arc, self.radius, 0.0)
-        phi0 = np.where(arc, self.start_angle, 0.0)
-        dphi = np.where(arc, self.end_angle - self.start_angle, 0.0)
-        t0 = np.roll(self.t, 1)
-        inv_dt = 1.0 / np.diff(self.t, prepend=-1.0)
+        a = np.concatenate([np.where(arc[:, None], self.center, prev), self.pt[-1:]])
+        b = np.concatenate([np.where(arc[:, None], 0.0, self.pt - prev), [[0.0, 0.0]]])
+        r = np.append(np.where(arc, self.radius, 0.0), 0.0)
+        phi0 = np.append(np.where(arc, self.start_angle, 0.0), 0.0)
+        dphi = np.append(np.where(arc, self.end_angle - self.start_angle, 0.0), 0.0)
+        t0 = np.append(np.roll(self.t, 1), 1.0)
+        inv_dt = np.append(1.0 / np.diff(self.t, prepend=-1.0), 0.0)
         a[0], b[0], t0[0] = self.pt[0], 0.0, 0.0
         r[0] = phi0[0] = dphi[0] = inv_dt[0] = 0.0
         return self.t, a, b, r, phi0, dphi, t0, inv_dt
@@ -150,16 +151,13 @@ class Curve:
         return tuple(x.astype(np.float32) for x in self._tables64)
 
     def _locate(self, s: np.ndarray, tables) -> tuple[np.ndarray, np.ndarray]:
-        """Piece index (first point whose t exceeds s) and fraction f in [0, 1]."""
+        """Table row (first point whose t exceeds s, else N) and fraction f in [0, 1]."""
         if not np.all(np.isfinite(s)):
             raise ValueError("curve position s must be finite (got NaN or infinity)")
         t, *_, t0, inv_dt = tables
         i = np.searchsorted(t, s, side="right")  # Listing 15.5: first i with s < t[i]
-        last = i >= len(t)  # s >= 1: the last point
-        i[last] = len(t) - 1
         f = (s - t0[i]) * inv_dt[i]
-        f[last] = 1.0
-        return i, np.clip(f, 0.0, 1.0, out=f)  # s < 0 lands on row 0, the first point
+        return i, np.clip(f, 0.0, 1.0, out=f)
 
     def evaluate(self, s, repeat: float | None = None) -> np.ndarray:
         """Points on the curve at positions ``s`` in [0, 1] (Listing 15.5).
@@ -183,7 +181,7 @@ class Curve:
         Examples
         --------
         >>> from pwc import compile_text
-        >>> c = compile_text("0 0\n1 0\n1 1 :angle 90")
+        >>> c = compile_text("0 0\\n1 0\\n1 1 :angle 90")
         >>> c.evaluate([-1.0, 0.0, 1.0, 2.0]).round(12).tolist()
         [[0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [1.0, 1.0]]
         """
@@ -220,7 +218,9 @@ class Curve:
         s = np.asarray(s, dtype=np.float64)
         tables = self._tables64
         i, f = self._locate(np.atleast_1d(s), tables)
-        i = np.maximum(i, 1)  # s < 0: derivative of the first piece
+        n = len(self.t)  # beyond the ends: the start of the first or end of the last piece
+        f = np.where(i == 0, 0.0, np.where(i == n, 1.0, f))
+        i = np.clip(i, 1, n - 1)
         _, a, b, r, phi0, dphi, _, inv_dt = tables
         phi = phi0[i] + dphi[i] * f
         k = (r[i] * dphi[i] * inv_dt[i])[..., None]
