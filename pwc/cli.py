@@ -95,7 +95,8 @@ def _write(path: Path, data: bytes) -> None:
 
 def cmd_compile(args) -> int:
     out = args.output
-    if out and out != "-" and len(args.files) > 1 and not Path(out).is_dir():
+    to_dir = out is None or out.endswith(("/", "\\")) or Path(out).is_dir()
+    if out and out != "-" and len(args.files) > 1 and not to_dir:
         raise CliError(f"-o {out}: with several input files, -o must be an existing "
                        "directory (or '-')", EXIT_USAGE)
     failed = False
@@ -114,8 +115,7 @@ def cmd_compile(args) -> int:
             from pwc.emit import mdl_identifier
 
             stem = mdl_identifier(stem)
-        target = Path(out) if out and not Path(out).is_dir() else \
-            Path(out or ".") / f"{stem}.{args.format}"
+        target = Path(out or ".") / f"{stem}.{args.format}" if to_dir else Path(out)
         _write(target, data)
         if args.format == "mdl":
             from pwc.emit import runtime_mdl
@@ -174,6 +174,20 @@ def cmd_info(args) -> int:
     return EXIT_ERRORS if failed else EXIT_OK
 
 
+def cmd_catalogue(args) -> int:
+    from pwc.catalogue import write_catalogue
+
+    try:
+        out = write_catalogue(Path(args.folder))
+    except FileNotFoundError as e:
+        raise CliError(str(e)) from None
+    except PwcError as e:
+        print(e, file=sys.stderr)
+        return EXIT_ERRORS
+    print(f"wrote {out}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pwc",
@@ -194,8 +208,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--format", "-f", choices=FORMATS, default="mdl",
                    help="output format (default: mdl)")
     p.add_argument("-o", "--output", metavar="PATH",
-                   help="output file, or directory (default: the current directory, "
-                        "NAME.FORMAT); '-' writes to stdout")
+                   help="output file, or directory (an existing one, or a path ending in "
+                        "'/'); default: NAME.FORMAT in the current directory; '-' writes "
+                        "to stdout")
     p.add_argument("--no-normalize", action="store_true",
                    help="keep source units (scale 1) instead of scaling the largest "
                         "coordinate to 1")
@@ -215,6 +230,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("files", nargs="+", metavar="FILE", help=".pwc files")
     p.add_argument("--no-normalize", action="store_true", help="show source units")
     p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("catalogue", help="draw a folder of profiles and write its README.md",
+                       description="Write FOLDER/drawings/NAME.svg for every FOLDER/*.pwc and "
+                                   "the catalogue page FOLDER/README.md.")
+    p.add_argument("folder", nargs="?", default="profiles", help="default: profiles")
+    p.set_defaults(func=cmd_catalogue)
 
     for ep in sorted(entry_points(group="pwc.commands"), key=lambda e: e.name):
         try:

@@ -13,10 +13,30 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
 __all__ = ["PwType", "Curve", "point_along_pwc"]
+
+
+class _Tables(NamedTuple):
+    """Per-row evaluation tables of a curve (see ``Curve._tables64``)."""
+
+    t: np.ndarray  # knots, with +inf appended
+    lut: np.ndarray
+    steps: int
+    t0: np.ndarray
+    inv_dt: np.ndarray
+    ax: np.ndarray
+    ay: np.ndarray
+    bx: np.ndarray
+    by: np.ndarray
+    r: np.ndarray
+    phi0: np.ndarray
+    dphi: np.ndarray
+
+    _floats = ("t", "t0", "inv_dt", "ax", "ay", "bx", "by", "r", "phi0", "dphi")
 
 
 class PwType(IntEnum):
@@ -122,11 +142,10 @@ class Curve:
                 lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
         return np.stack([lo, hi])
 
-    # -- the piece table: every piece as p(f) = a + b f + r (cos(phi0 + dphi f), sin(...)) --
+    # -- the piece table: each piece as p(f) = a + b f + r (cos(phi0 + dphi f), sin(...)) --
     @cached_property
-    def _tables64(self) -> tuple[np.ndarray, ...]:
-        """``(t, a, b, r, phi0, dphi, t0, inv_dt)``; rows 1..N-1 are the pieces, indexed
-        by their end point.
+    def _tables64(self) -> _Tables:
+        """Evaluation tables; rows 1..N-1 are the pieces, indexed by their end point.
 
         Segments have r = 0 and b = pt[i] - pt[i-1]; arcs have a = centre, b = 0, so one
         branch-free formula evaluates both exactly.  Row 0 is the constant first point
@@ -136,27 +155,44 @@ class Curve:
         prev = np.roll(self.pt, 1, axis=0)
         a = np.concatenate([np.where(arc[:, None], self.center, prev), self.pt[-1:]])
         b = np.concatenate([np.where(arc[:, None], 0.0, self.pt - prev), [[0.0, 0.0]]])
-        r = np.append(np.where(arc, self.radius, 0.0), 0.0)
-        phi0 = np.append(np.where(arc, self.start_angle, 0.0), 0.0)
-        dphi = np.append(np.where(arc, self.end_angle - self.start_angle, 0.0), 0.0)
+        a[0], b[0] = self.pt[0], 0.0
+        first_last = lambda x: np.append(np.where(arc, x, 0.0), 0.0)  # noqa: E731
+        r = first_last(self.radius)
+        phi0 = first_last(self.start_angle)
+        dphi = first_last(self.end_angle - self.start_angle)
+        r[0] = phi0[0] = dphi[0] = 0.0
         t0 = np.append(np.roll(self.t, 1), 1.0)
         inv_dt = np.append(1.0 / np.diff(self.t, prepend=-1.0), 0.0)
-        a[0], b[0], t0[0] = self.pt[0], 0.0, 0.0
-        r[0] = phi0[0] = dphi[0] = inv_dt[0] = 0.0
-        return self.t, a, b, r, phi0, dphi, t0, inv_dt
+        t0[0] = inv_dt[0] = 0.0
+        # a uniform lookup table over s replaces the binary search: lut[k] is the piece
+        # of s = k / K, and at most `steps` knots lie inside any one bin
+        k = min(len(self.t) * 64, 1 << 20)
+        lut = np.searchsorted(self.t, np.arange(k) / k, side="right").astype(np.int32)
+        steps = int(np.max(np.searchsorted(self.t, np.arange(1, k + 1) / k, side="right") - lut))
+        col = np.ascontiguousarray
+        return _Tables(np.append(self.t, np.inf), lut, steps, t0, inv_dt, col(a[:, 0]),
+                       col(a[:, 1]), col(b[:, 0]), col(b[:, 1]), r, phi0, dphi)
 
     @cached_property
-    def _tables32(self) -> tuple[np.ndarray, ...]:
+    def _tables32(self) -> _Tables:
         """The tables rounded to float32, as an MDL renderer holds them."""
-        return tuple(x.astype(np.float32) for x in self._tables64)
+        t = self._tables64
+        return t._replace(**{k: getattr(t, k).astype(np.float32) for k in _Tables._floats})
 
-    def _locate(self, s: np.ndarray, tables) -> tuple[np.ndarray, np.ndarray]:
-        """Table row (first point whose t exceeds s, else N) and fraction f in [0, 1]."""
+    def _locate(self, s: np.ndarray, tab: _Tables) -> tuple[np.ndarray, np.ndarray]:
+        """Table row (the first point whose t exceeds s, as Listing 15.5 searches; N past
+        the end, 0 before the start) and the fraction f in [0, 1] along that piece."""
         if not np.all(np.isfinite(s)):
             raise ValueError("curve position s must be finite (got NaN or infinity)")
-        t, *_, t0, inv_dt = tables
-        i = np.searchsorted(t, s, side="right")  # Listing 15.5: first i with s < t[i]
-        f = (s - t0[i]) * inv_dt[i]
+        if tab.steps > 8:  # knots crowded into few bins: binary search is faster
+            i = np.searchsorted(tab.t[:-1], s, side="right")
+        else:
+            k = len(tab.lut)
+            i = np.take(tab.lut, np.clip(s * k, 0, k - 1).astype(np.intp))
+            for _ in range(tab.steps):
+                i += np.take(tab.t, i) <= s
+            i[s < 0] = 0
+        f = (s - np.take(tab.t0, i)) * np.take(tab.inv_dt, i)
         return i, np.clip(f, 0.0, 1.0, out=f)
 
     def evaluate(self, s, repeat: float | None = None) -> np.ndarray:
@@ -189,14 +225,15 @@ class Curve:
         s = s.astype(np.float32 if s.dtype == np.float32 else np.float64, copy=False)
         if repeat is not None:
             return self._evaluate_repeat(s, repeat)
-        tables = self._tables32 if s.dtype == np.float32 else self._tables64
-        i, f = self._locate(np.atleast_1d(s), tables)
-        _, a, b, r, phi0, dphi, *_ = tables
-        phi = phi0[i] + dphi[i] * f
-        out = a[i] + b[i] * f[..., None]
-        rr = r[i]
-        out[..., 0] += rr * np.cos(phi)
-        out[..., 1] += rr * np.sin(phi)
+        tab = self._tables32 if s.dtype == np.float32 else self._tables64
+        flat = s.ravel()
+        i, f = self._locate(flat, tab)
+        take = np.take
+        phi = take(tab.phi0, i) + take(tab.dphi, i) * f
+        r = take(tab.r, i)
+        out = np.empty((len(flat), 2), dtype=s.dtype)
+        out[:, 0] = take(tab.ax, i) + take(tab.bx, i) * f + r * np.cos(phi)
+        out[:, 1] = take(tab.ay, i) + take(tab.by, i) * f + r * np.sin(phi)
         return out.reshape(*s.shape, 2)
 
     def _evaluate_repeat(self, s: np.ndarray, repeat: float) -> np.ndarray:
@@ -213,18 +250,18 @@ class Curve:
         """d point / d s at ``s`` (magnitude ``length`` inside pieces; one-sided at knots).
 
         At a knot the derivative is that of the piece that *starts* there (the piece
-        Listing 15.5 selects); at ``s >= 1`` it is the end of the last piece.
+        Listing 15.5 selects); before 0 and from 1 on, that of the first and last piece.
         """
         s = np.asarray(s, dtype=np.float64)
-        tables = self._tables64
-        i, f = self._locate(np.atleast_1d(s), tables)
-        n = len(self.t)  # beyond the ends: the start of the first or end of the last piece
+        tab = self._tables64
+        i, f = self._locate(s.ravel(), tab)
+        n = len(self.t)
         f = np.where(i == 0, 0.0, np.where(i == n, 1.0, f))
         i = np.clip(i, 1, n - 1)
-        _, a, b, r, phi0, dphi, _, inv_dt = tables
-        phi = phi0[i] + dphi[i] * f
-        k = (r[i] * dphi[i] * inv_dt[i])[..., None]
-        d = b[i] * inv_dt[i][..., None] + k * np.stack([-np.sin(phi), np.cos(phi)], -1)
+        phi = tab.phi0[i] + tab.dphi[i] * f
+        k = tab.r[i] * tab.dphi[i] * tab.inv_dt[i]
+        d = np.stack([tab.bx[i] * tab.inv_dt[i] - k * np.sin(phi),
+                      tab.by[i] * tab.inv_dt[i] + k * np.cos(phi)], -1)
         return d.reshape(*s.shape, 2)
 
     def tangent(self, s) -> np.ndarray:

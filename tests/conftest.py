@@ -1,4 +1,4 @@
-"""Shared fixtures: a seeded rng, the repository root, and strict floating point."""
+"""Shared fixtures: a seeded rng and the repository root."""
 
 from __future__ import annotations
 
@@ -6,9 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-ROOT = Path(__file__).resolve().parent.parent
-PROFILES = sorted((ROOT / "profiles").glob("*.pwc"))
+from repo import ROOT
 
 
 @pytest.fixture

@@ -150,3 +150,20 @@ def test_properties_of_generated_curves(text):
     assert c.length == pytest.approx(_dense_length(c), rel=1e-6)
     s = np.random.default_rng(0).uniform(-0.5, 1.5, 2000)
     assert np.all(np.isfinite(c.evaluate(s))) and np.all(np.isfinite(c.derivative(s)))
+
+
+@pytest.mark.parametrize("n", [2, 7, 300, 20_000])
+def test_lookup_table_search_equals_listing_15_5_search(n):
+    rng = np.random.default_rng(n)
+    steps = rng.uniform(0.001, 1.0, (n - 1, 2)) * rng.choice([1e-4, 1.0], (n - 1, 1))
+    text = ":relative\n0 0\n" + "".join(f"{dx!r} {dy!r}\n" for dx, dy in steps)
+    c = compile_text(text)
+    s = np.concatenate([c.t, np.nextafter(c.t, -1), np.nextafter(c.t, 2), rng.random(5000),
+                        [-1.0, -0.0, 1.0, 3.0]])
+    for dtype in (np.float64, np.float32):
+        tab = c._tables64 if dtype == np.float64 else c._tables32
+        ss = s.astype(dtype)
+        i, _ = c._locate(ss, tab)
+        expect = np.searchsorted(tab.t[:-1], ss, side="right")  # first t exceeding s
+        expect[ss < 0] = 0
+        np.testing.assert_array_equal(i, expect)
