@@ -28,6 +28,7 @@ _NUMBER = re.compile(
     rf"|(?P<num>{_DECIMAL})/(?P<den>{_DECIMAL})|(?P<dec>{_DECIMAL}))"
 )
 _TOKEN = re.compile(r"\S+")
+MAX_ERRORS = 50  # a file that is not a pwc-list at all should not print 10,000 errors
 
 NUMBER_HELP = (
     "numbers look like 15, -3, 0.375, .5, 1e-3, fractions 1/3, mixed numbers 2-1/3; "
@@ -94,8 +95,10 @@ class _Parser:
         self.file = file
         self.text = text
         self.diags: list[Diagnostic] = []
+        self.errors = 0
 
     def error(self, msg: str, line: int, text: str, col: int, width: int, fix: str = "") -> None:
+        self.errors += 1
         self.diags.append(Diagnostic("error", msg, Loc(self.file, line, col, width, text), fix))
 
     def warn(self, msg: str, line: int, text: str, col: int, width: int, fix: str = "") -> None:
@@ -162,7 +165,11 @@ class _Parser:
             point = self.point(toks, lineno, raw, is_first=not points)
             if point is not None:
                 points.append(point)
-        if not self.diags or all(d.severity == "warning" for d in self.diags):
+            if self.errors >= MAX_ERRORS:
+                self.error(f"too many errors; stopped after {MAX_ERRORS}", lineno, "", 1, 1,
+                           "fix the errors above first (is this really a pwc-list?)")
+                break
+        if not self.errors:
             last = max(1, len(self.text.splitlines()))
             if not points:
                 self.error("the list has no points", last, "", 1, 1,

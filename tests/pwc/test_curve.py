@@ -156,7 +156,7 @@ def test_properties_of_generated_curves(text):
 def test_lookup_table_search_equals_listing_15_5_search(n):
     rng = np.random.default_rng(n)
     steps = rng.uniform(0.001, 1.0, (n - 1, 2)) * rng.choice([1e-4, 1.0], (n - 1, 1))
-    text = ":relative\n0 0\n" + "".join(f"{dx!r} {dy!r}\n" for dx, dy in steps)
+    text = ":relative\n0 0\n" + "".join(f"{float(dx)!r} {float(dy)!r}\n" for dx, dy in steps)
     c = compile_text(text)
     s = np.concatenate([c.t, np.nextafter(c.t, -1), np.nextafter(c.t, 2), rng.random(5000),
                         [-1.0, -0.0, 1.0, 3.0]])

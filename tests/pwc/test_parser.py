@@ -206,3 +206,8 @@ def test_mutated_lists_raise_only_pwc_errors(parts):
         assert all(math.isfinite(v) for v in curve.pt.ravel())
     except PwcError as e:
         assert e.diagnostics
+
+
+def test_a_file_that_is_not_a_pwc_list_stops_after_fifty_errors():
+    err = _error("word word\n" * 1000)
+    assert len(err.diagnostics) == 51 and "too many errors" in err.diagnostics[-1].message
