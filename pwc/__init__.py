@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pwc.tree import PwcList
 from pwc.compiler import compile_list
 from pwc.curve import Curve, PwType, point_along_pwc
 from pwc.diagnostics import Diagnostic, Loc, PwcError, PwcGeometryError, PwcSyntaxError
 from pwc.parser import decode_source, parse
+from pwc.tree import PwcList
 
 __all__ = [
     "Curve", "PwType", "PwcList", "Diagnostic", "Loc", "PwcError", "PwcSyntaxError",

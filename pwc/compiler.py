@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
-from pwc.tree import PwcList, PwPoint
 from pwc.curve import Curve, PwType
 from pwc.diagnostics import Diagnostic, PwcGeometryError
 from pwc.tolerance import TOL
+from pwc.tree import PwcList, PwPoint
 
 __all__ = ["compile_list", "arc_through", "resolve_points"]
 

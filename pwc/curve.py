@@ -130,17 +130,18 @@ class Curve:
     @cached_property
     def bbox(self) -> np.ndarray:
         """(2, 2) [[xmin, ymin], [xmax, ymax]] of the exact curve, arcs included."""
-        s, pts = self.polyline(np.inf)
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        # extreme points of arcs: angles that are multiples of pi/2 inside each sweep
-        for i in np.flatnonzero(self.is_arc):
-            a0, a1 = self.start_angle[i], self.end_angle[i]
-            k = np.arange(np.ceil(min(a0, a1) / (np.pi / 2)), np.floor(max(a0, a1) / (np.pi / 2)) + 1)
-            if len(k):
-                phi = k * np.pi / 2
-                p = self.center[i] + self.radius[i] * np.stack([np.cos(phi), np.sin(phi)], -1)
-                lo, hi = np.minimum(lo, p.min(axis=0)), np.maximum(hi, p.max(axis=0))
-        return np.stack([lo, hi])
+        arc = np.flatnonzero(self.is_arc)
+        lo0, hi0 = np.minimum(self.start_angle[arc], self.end_angle[arc]), \
+            np.maximum(self.start_angle[arc], self.end_angle[arc])
+        # an arc's extremes are its ends and the multiples of pi/2 inside its sweep
+        # (start in (-pi, pi] and |sweep| < 2 pi keep angles within (-3 pi, 3 pi))
+        quarter = np.arange(-6, 7) * (np.pi / 2)
+        inside = (quarter >= lo0[:, None]) & (quarter <= hi0[:, None])
+        k, q = np.nonzero(inside)
+        extremes = self.center[arc[k]] + self.radius[arc[k], None] * np.stack(
+            [np.cos(quarter[q]), np.sin(quarter[q])], -1)
+        pts = np.concatenate([self.pt, extremes])
+        return np.stack([pts.min(axis=0), pts.max(axis=0)])
 
     # -- the piece table: each piece as p(f) = a + b f + r (cos(phi0 + dphi f), sin(...)) --
     @cached_property
@@ -168,7 +169,8 @@ class Curve:
         # of s = k / K, and at most `steps` knots lie inside any one bin
         k = min(len(self.t) * 64, 1 << 20)
         lut = np.searchsorted(self.t, np.arange(k) / k, side="right").astype(np.int32)
-        steps = int(np.max(np.searchsorted(self.t, np.arange(1, k + 1) / k, side="right") - lut))
+        ends = np.searchsorted(self.t, np.arange(1, k + 1) / k, side="right")
+        steps = int(np.max(ends - lut))
         col = np.ascontiguousarray
         return _Tables(np.append(self.t, np.inf), lut, steps, t0, inv_dt, col(a[:, 0]),
                        col(a[:, 1]), col(b[:, 0]), col(b[:, 1]), r, phi0, dphi)

@@ -38,13 +38,14 @@ def drawing(curve: Curve) -> Drawing:
     _, poly = curve.polyline(size * 2e-4)
     arcs = np.flatnonzero(curve.is_arc)
     prev = curve.pt[arcs - 1]
-    radii = [np.stack([a, c, b]) for a, c, b in zip(prev, curve.center[arcs], curve.pt[arcs])]
+    ends = zip(prev, curve.center[arcs], curve.pt[arcs], strict=True)
+    radii = [np.stack([a, c, b]) for a, c, b in ends]
     sag = arcs[curve.type[arcs] == PwType.SAGITTA]
     mid_phi = 0.5 * (curve.start_angle[sag] + curve.end_angle[sag])
     arc_mid = curve.center[sag] + curve.radius[sag, None] * np.stack(
         [np.cos(mid_phi), np.sin(mid_phi)], -1)
     chord_mid = 0.5 * (curve.pt[sag - 1] + curve.pt[sag])
-    sagittas = [np.stack([c, m]) for c, m in zip(chord_mid, arc_mid)]
+    sagittas = [np.stack([c, m]) for c, m in zip(chord_mid, arc_mid, strict=True)]
     # the displaced unit square spans [0, 1] in y (the run) and x from 0 to the curve
     everything = np.concatenate([poly, curve.center[arcs], [[0.0, 0.0], [0.0, 1.0]]])
     # centres of huge, nearly flat arcs would shrink the picture to a dot: keep them only

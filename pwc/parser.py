@@ -17,8 +17,8 @@ import difflib
 import math
 import re
 
-from pwc.tree import LIST_PROPERTIES, POINT_PROPERTIES, Coord, PwcList, PwPoint
 from pwc.diagnostics import Diagnostic, Loc, PwcSyntaxError
+from pwc.tree import LIST_PROPERTIES, POINT_PROPERTIES, Coord, PwcList, PwPoint
 
 __all__ = ["parse", "parse_number", "decode_source", "NUMBER_HELP"]
 
@@ -223,7 +223,8 @@ class _Parser:
                 extra = args[nargs]
                 n = "no arguments" if nargs == 0 else "one argument"
                 self.error(f"':{name}' takes {n}", lineno, raw, extra.start() + 1,
-                           args[-1].end() - extra.start(), f"remove '{_span(raw, extra, args[-1])}'")
+                           args[-1].end() - extra.start(),
+                           f"remove '{_span(raw, extra, args[-1])}'")
                 return None
             if nargs:
                 if args[0].group().startswith("a"):

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from pwc_strategies import compile_valid, valid_lists
 
 from pwc import PwcError, PwType, compile_source, compile_text
 from pwc.compiler import resolve_points
 from pwc.parser import parse
-from pwc_strategies import compile_valid, valid_lists
 
 SEGMENTS = "0 0\n.7 0\n.7 .4\n3/7 .4\n3/7 4/3\n4/7 1\n"
 RIGHT_ANGLE_ARC = """:relative
@@ -208,7 +208,7 @@ def test_one_hundred_thousand_points():
     steps = rng.uniform(0.1, 1.0, (n - 1, 2))
     props = np.where(np.arange(n - 1) % 3 == 0, " :sag .05", "")
     text = ":relative\n0 0\n" + "".join(
-        f"{dx:.6f} {dy:.6f}{p}\n" for (dx, dy), p in zip(steps, props))
+        f"{dx:.6f} {dy:.6f}{p}\n" for (dx, dy), p in zip(steps, props, strict=True))
     c = compile_text(text)
     assert c.n == n and np.all(np.diff(c.t) > 0)
     assert np.all(np.isfinite(c.evaluate(rng.random(10_000))))

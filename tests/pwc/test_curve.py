@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from hypothesis import given, settings
-
-from pwc import PwType, compile_source, compile_text, point_along_pwc
 from pwc_strategies import compile_valid, valid_lists
+
+from pwc import PwType, compile_text, point_along_pwc
 
 TEE = "0 0\n.375 0\n.375 .25\n.125 .25\n.125 .5\n.875 .5\n.875 .25\n.625 .25\n.625 0\n1 0\n"
 ARCS = "0 0\n1 0\n1 1 :angle 90\n2 2 :sag -.3\n3 3 :cyma_recta\n3 4 :flare\n0 5 :cyma_reversa\n"

@@ -7,13 +7,21 @@ import math
 
 import numpy as np
 import pytest
-from repo import PROFILES
 from mdl_syntax import EnumRef, parse_module
+from repo import PROFILES
 
 import pwc
-from pwc.emit import (from_json, from_npz, mdl_float, mdl_identifier, runtime_mdl, to_json,
-                      to_mdl, to_npz)
 from pwc.draw import to_png, to_svg
+from pwc.emit import (
+    from_json,
+    from_npz,
+    mdl_float,
+    mdl_identifier,
+    runtime_mdl,
+    to_json,
+    to_mdl,
+    to_npz,
+)
 
 
 def test_runtime_module_is_valid_mdl_with_the_handbook_types():

@@ -108,7 +108,7 @@ def test_diagnostics_name_file_line_column_and_fix(text, line, col, message, fix
     assert message in d.message, d.format()
     assert fix in d.fix, d.format()
     report = str(err)
-    assert report.startswith(f"m.pwc:{line}:{col}: error:") or f"m.pwc:{line}:{col}: error:" in report
+    assert f"m.pwc:{line}:{col}: error:" in report
     if d.loc.text:  # the culprit line is quoted with a caret under the column
         quoted = report.splitlines()
         i = next(k for k, s in enumerate(quoted) if s.startswith(f"m.pwc:{line}:{col}: error"))
