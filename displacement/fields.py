@@ -224,7 +224,7 @@ def constant(displacement=(0.0, 0.0, 0.0)) -> Field:
 
 
 def _build_registry() -> dict[str, Callable[..., Field]]:
-    from displacement import bubble, profile, pwc_fields, vector, waves
+    from displacement import bubble, heightmap, profile, pwc_fields, vector, waves
 
     return {
         "constant": constant,
@@ -234,6 +234,8 @@ def _build_registry() -> dict[str, Callable[..., Field]]:
         "waver": waves.waves_as_displacement,
         "waves": waves.waves,
         "glossy_waves": waves.waves,
+        "diffuse_weave": heightmap.diffuse_weave,
+        "weave": heightmap.diffuse_weave,
         # chapter 14.1-14.2
         "move_up": vector.move_up,
         "raise": vector.raise_,

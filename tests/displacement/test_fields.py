@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from repo import ROOT
 
 import pwc
 from displacement.fields import (
@@ -101,6 +102,8 @@ ARGUMENTS = {  # the Handbook parameters without defaults
     "pwc_angular_displace": (SEGMENTS,),
     "radial_pwc": (SEGMENTS,),
     "double_pwc": (SEGMENTS, DORIC),
+    "diffuse_weave": (ROOT / "gallery" / "textures" / "weave_depth.png", (8.0, 4.0), 0.05),
+    "weave": (ROOT / "gallery" / "textures" / "weave_depth.png", (8.0, 4.0), 0.05),
 }
 
 
