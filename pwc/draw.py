@@ -29,6 +29,7 @@ class Drawing:
     radii: list[np.ndarray]  # (3, 2) polylines: start -> centre -> end, one per arc
     sagittas: list[np.ndarray]  # (2, 2) chord midpoint -> arc midpoint, one per :sag arc
     frame: np.ndarray  # (2, 2) [[xmin, ymin], [xmax, ymax]] of everything to show
+    wall: np.ndarray  # (k, 2) the undisplaced surface x = 0 (none for closed sweep curves)
 
 
 def drawing(curve: Curve) -> Drawing:
@@ -47,12 +48,13 @@ def drawing(curve: Curve) -> Drawing:
     chord_mid = 0.5 * (curve.pt[sag - 1] + curve.pt[sag])
     sagittas = [np.stack([c, m]) for c, m in zip(chord_mid, arc_mid, strict=True)]
     # the displaced unit square spans [0, 1] in y (the run) and x from 0 to the curve
-    everything = np.concatenate([poly, curve.center[arcs], [[0.0, 0.0], [0.0, 1.0]]])
+    wall = np.zeros((0, 2)) if curve.is_closed else np.array([[0.0, 0.0], [0.0, 1.0]])
+    everything = np.concatenate([poly, curve.center[arcs], wall])
     # centres of huge, nearly flat arcs would shrink the picture to a dot: keep them only
     # when they are near the curve
     near = np.all(np.abs(everything - poly.mean(0)) <= 4 * size, axis=1)
     frame = np.stack([everything[near].min(0), everything[near].max(0)])
-    return Drawing(poly, curve.pt.copy(), curve.center[arcs], radii, sagittas, frame)
+    return Drawing(poly, curve.pt.copy(), curve.center[arcs], radii, sagittas, frame, wall)
 
 
 def _svg_path(pts: np.ndarray, tx) -> str:
@@ -84,9 +86,9 @@ def to_svg(curve: Curve, width: int = 640) -> str:
            f'viewBox="0 0 {width} {height}">',
            f"<title>{curve.name}: {curve.n} pw-points, length {curve.length:.5g}</title>",
            f'<rect width="{width}" height="{height}" fill="white"/>']
-    sq = np.array([[0, 0], [0, 1]])  # the undisplaced square seen edge-on: x = 0
-    out.append(f'<path d="{_svg_path(sq, tx)}" stroke="{_BLUE}" stroke-width="{3 * stroke}" '
-               'fill="none" opacity="0.6"/>')
+    if len(d.wall):  # the undisplaced square seen edge-on: x = 0
+        out.append(f'<path d="{_svg_path(d.wall, tx)}" stroke="{_BLUE}" '
+                   f'stroke-width="{3 * stroke}" fill="none" opacity="0.6"/>')
     for r in d.radii:
         out.append(f'<path d="{_svg_path(r, tx)}" stroke="{_CENTER}" stroke-width="{stroke}" '
                    f'stroke-dasharray="{4 * stroke},{3 * stroke}" fill="none"/>')
@@ -118,7 +120,8 @@ def to_png(curve: Curve, size_px: int = 800) -> bytes:
     aspect = float(np.clip(span[1] / span[0], 0.25, 4.0))
     fig, ax = plt.subplots(figsize=(6 / max(aspect, 1) * 1.0 + 1, 6 * min(aspect, 1) + 1),
                            dpi=size_px / 7)
-    ax.plot([0, 0], [0, 1], color=_BLUE, lw=4, alpha=0.6, label="undisplaced surface")
+    if len(d.wall):
+        ax.plot(d.wall[:, 0], d.wall[:, 1], color=_BLUE, lw=4, alpha=0.6)
     for r in d.radii:
         ax.plot(r[:, 0], r[:, 1], color=_CENTER, lw=0.8, ls="--")
     for s in d.sagittas:
