@@ -35,9 +35,10 @@ def catalogue_markdown(paths: list[Path]) -> str:
         c = pwc.load(path)
         arcs = int(np.sum(c.is_arc))
         kinds = sorted({PwType(int(k)).mdl_name for k in c.type[1:]})
+        arcs_text = f"{arcs} arc" + ("" if arcs == 1 else "s")
         rows.append(
             f"| ![{c.name}](drawings/{c.name}.svg) | **`{c.name}`**<br>{description(path)} | "
-            f"{c.length:.5f} | {c.n - 1} ({arcs} arc{'' if arcs == 1 else 's'}) | {', '.join(kinds)} | "
+            f"{c.length:.5f} | {c.n - 1} ({arcs_text}) | {', '.join(kinds)} | "
             f"{'closed' if c.is_closed else 'open'} |")
     head = (
         "# The profile library\n\n"

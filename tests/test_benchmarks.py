@@ -1,0 +1,29 @@
+"""Every benchmark still runs (tiny sizes): they are the record of measured trade-offs,
+so they must not rot.  Figures are not asserted here; they live in README/docs."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from repo import ROOT
+
+BENCHMARKS = {
+    "pwc_speed.py": ["--points", "500", "--positions", "20000"],
+    "bake_roundtrip.py": ["--sizes", "16", "--samples", "2000"],
+    "dicing.py": ["--quick", "--size", "64", "--samples", "500", "--n-max", "64"],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(BENCHMARKS))
+def test_benchmark_runs(name):
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / name), *BENCHMARKS[name]],
+                       capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() and "Traceback" not in r.stderr
+
+
+def test_every_benchmark_is_exercised():
+    assert {p.name for p in (ROOT / "benchmarks").glob("*.py")} == set(BENCHMARKS)
