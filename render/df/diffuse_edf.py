@@ -1,0 +1,61 @@
+"""MDL ``df::diffuse_edf``: uniform (Lambertian) emission, radiance = intensity / pi.
+
+MDL signature::
+
+    edf diffuse_edf(uniform string handle = "");
+
+Model (libbsdf, ``reference/mdl-distribution-functions.md`` §5): ``eval = 1/pi`` toward
+every direction of the ``+z`` hemisphere, normalised so that ``∫ eval cos theta = 1``;
+the renderer multiplies by ``material_emission.intensity`` (radiant exitance, or power
+over area in ``intensity_power`` mode).  **So an intensity ``I`` is seen as radiance
+``I / pi``: to display a color ``c``, set ``intensity = pi c``** (as NVIDIA's
+``core_definitions.mdl`` does).  Cosine-weighted sampling, ``pdf = cos theta / pi``,
+weight 1.  Only ``+z`` emits (the integrator orients the frame toward the emitting face).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from render._typing import Arr, Arr2, Rgb, Vec3
+from render.bsdf import Edf, EdfSample, check_dirs, check_samples
+from render.df._common import INV_PI
+from render.numerics import TOL
+from render.warp import square_to_cosine_hemisphere
+
+__all__ = ["DiffuseEdf", "diffuse_edf"]
+
+
+class DiffuseEdf(Edf):
+    """``df::diffuse_edf`` over lanes.
+
+    Examples
+    --------
+    >>> e = diffuse_edf()
+    >>> (e.eval(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])) * np.pi).tolist()
+    [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]
+    """
+
+    def __repr__(self) -> str:
+        return "diffuse_edf()"
+
+    def eval(self, wo: Vec3) -> Rgb:
+        (wo,) = check_dirs(wo, names=("wo",))
+        return np.repeat(np.where(wo[:, 2] > TOL.cos_zero, INV_PI, 0.0)[:, None], 3, axis=1)
+
+    def pdf(self, wo: Vec3) -> Arr:
+        (wo,) = check_dirs(wo, names=("wo",))
+        return np.where(wo[:, 2] > TOL.cos_zero, wo[:, 2] * INV_PI, 0.0)
+
+    def sample(self, u1: Arr, u2: Arr2) -> EdfSample:
+        u1, u2 = check_samples(len(np.asarray(u2)), u1, u2)
+        wo = square_to_cosine_hemisphere(u2)
+        ok = wo[:, 2] > TOL.cos_zero
+        return EdfSample(
+            np.where(ok[:, None], wo, 0.0),
+            np.where(ok, wo[:, 2] * INV_PI, 0.0),
+            np.repeat(ok.astype(np.float64)[:, None], 3, axis=1),
+        )
+
+
+diffuse_edf = DiffuseEdf

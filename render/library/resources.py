@@ -1,0 +1,196 @@
+"""Where materials find their profiles (``profiles/*.pwc``) and textures (``gallery/textures``).
+
+Materials that name a resource (``texture_2d("weave_depth.png")``,
+``ornament_2::ornament_2``) look it up here.  The search paths default to the
+repository's ``profiles/`` and ``gallery/textures/`` and can be changed for a block of
+code with :func:`search_paths` (the expression parser does so with its ``profile_dirs``
+and ``base_dir`` arguments).  Loaded curves and textures are cached by path and
+modification time, so a material built many times loads each file once (MDL's
+``uniform`` values: computed once per render, not per ray).
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from pathlib import Path
+
+import numpy as np
+
+from displacement.textures import Texture, read_texture
+
+__all__ = [
+    "ResourceError",
+    "ROOT",
+    "DEFAULT_PROFILE_DIRS",
+    "DEFAULT_TEXTURE_DIRS",
+    "search_paths",
+    "profile_dirs",
+    "texture_dirs",
+    "find_profile",
+    "load_profile",
+    "profile_names",
+    "find_texture",
+    "load_texture",
+    "INVALID_TEXTURE",
+]
+
+ROOT = Path(__file__).resolve().parents[2]  # the repository (render/library/..)
+DEFAULT_PROFILE_DIRS: tuple[Path, ...] = (ROOT / "profiles",)
+DEFAULT_TEXTURE_DIRS: tuple[Path, ...] = (ROOT / "gallery" / "textures",)
+
+#: MDL's ``texture_2d()``: an invalid texture; every lookup returns 0 (MDL spec).
+INVALID_TEXTURE = Texture(np.zeros((1, 1, 3)), name="texture_2d()")
+
+class ResourceError(ValueError):
+    """A profile or texture that cannot be found or read; ``hint`` suggests a fix."""
+
+    def __init__(self, message: str, hint: str | None = None):
+        self.message = message
+        self.hint = hint
+        super().__init__(message + (f" ({hint})" if hint else ""))
+
+
+_Dirs = tuple[Path, ...]
+_PROFILE_DIRS: ContextVar[_Dirs] = ContextVar("profile_dirs", default=DEFAULT_PROFILE_DIRS)
+_TEXTURE_DIRS: ContextVar[_Dirs] = ContextVar("texture_dirs", default=DEFAULT_TEXTURE_DIRS)
+_CURVES: dict = {}
+_TEXTURES: dict = {}
+
+
+def _as_dirs(dirs: Sequence[str | os.PathLike] | str | os.PathLike) -> tuple[Path, ...]:
+    if isinstance(dirs, str | os.PathLike):
+        dirs = [dirs]
+    return tuple(Path(d) for d in dirs)
+
+
+@contextmanager
+def search_paths(profile_dirs=None, texture_dirs=None) -> Iterator[None]:
+    """Search ``profile_dirs`` / ``texture_dirs`` first (then the defaults) inside the block.
+
+    Parameters
+    ----------
+    profile_dirs, texture_dirs : path or sequence of paths, optional
+    """
+    tokens = []
+    if profile_dirs is not None:
+        dirs = _as_dirs(profile_dirs) + DEFAULT_PROFILE_DIRS
+        tokens.append((_PROFILE_DIRS, _PROFILE_DIRS.set(dirs)))
+    if texture_dirs is not None:
+        dirs = _as_dirs(texture_dirs) + DEFAULT_TEXTURE_DIRS
+        tokens.append((_TEXTURE_DIRS, _TEXTURE_DIRS.set(dirs)))
+    try:
+        yield
+    finally:
+        for var, token in reversed(tokens):
+            var.reset(token)
+
+
+def profile_dirs() -> tuple[Path, ...]:
+    """The directories searched for ``NAME.pwc`` now."""
+    return _PROFILE_DIRS.get()
+
+
+def texture_dirs() -> tuple[Path, ...]:
+    """The directories searched for texture files now."""
+    return _TEXTURE_DIRS.get()
+
+
+def profile_names() -> list[str]:
+    """Stems of every ``.pwc`` file on the profile search path, sorted."""
+    names = set()
+    for d in profile_dirs():
+        if d.is_dir():
+            names.update(p.stem for p in d.glob("*.pwc"))
+    return sorted(names)
+
+
+def find_profile(name: str) -> Path | None:
+    """The first ``NAME.pwc`` on the profile search path, or None."""
+    if not name or any(c in name for c in "/\\\0") or name in (".", ".."):
+        return None
+    for d in profile_dirs():
+        path = d / f"{name}.pwc"
+        if path.is_file():
+            return path
+    return None
+
+
+def load_profile(name: str):
+    """The compiled curve ``profiles/NAME.pwc`` (cached).
+
+    Raises
+    ------
+    ResourceError
+        No such profile (with a suggestion); ``pwc.PwcError`` if it does not compile.
+    """
+    import pwc
+
+    path = find_profile(name)
+    if path is None:
+        hint = difflib.get_close_matches(name, profile_names(), 1)
+        raise ResourceError(
+            f"no profile {name!r}: there is no {name}.pwc in "
+            f"{', '.join(str(d) for d in profile_dirs())}",
+            f"did you mean {hint[0]!r}?" if hint else None,
+        )
+    key = (path.resolve(), path.stat().st_mtime_ns)
+    if key not in _CURVES:
+        _CURVES[key] = pwc.load(path)
+    return _CURVES[key]
+
+
+def find_texture(file: str, base_dir=None) -> Path | None:
+    """``file`` as given if absolute, else the first match in ``base_dir`` and the texture
+    search path; None if not found."""
+    if not file or "\0" in file:
+        return None
+    candidate = Path(file)
+    if candidate.is_absolute():
+        return candidate if candidate.is_file() else None
+    dirs = ((Path(base_dir),) if base_dir is not None else ()) + texture_dirs()
+    for d in dirs:
+        path = d / candidate
+        if path.is_file():
+            return path
+    return None
+
+
+def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
+    """Read a texture file found by :func:`find_texture` (cached).
+
+    Parameters
+    ----------
+    file : str
+    gamma : {"linear", "srgb", "default"}
+        As :func:`displacement.textures.read_texture`.
+    base_dir : path, optional
+        Searched first.
+
+    Raises
+    ------
+    ResourceError
+        Not found (with suggestions of files of the same stem) or unreadable.
+    """
+    path = find_texture(file, base_dir)
+    if path is None:
+        dirs = ((Path(base_dir),) if base_dir is not None else ()) + texture_dirs()
+        stem = Path(file).stem
+        same_stem = sorted({p.name for d in dirs if d.is_dir() for p in d.glob(f"{stem}.*")})
+        names = sorted({p.name for d in dirs if d.is_dir() for p in d.iterdir() if p.is_file()})
+        hint = (difflib.get_close_matches(Path(file).name, same_stem, 1) or same_stem
+                or difflib.get_close_matches(Path(file).name, names, 1))
+        raise ResourceError(
+            f"texture {file!r} not found in {', '.join(str(d) for d in dirs)}",
+            f"did you mean {hint[0]!r}?" if hint else None,
+        )
+    key = (path.resolve(), path.stat().st_mtime_ns, gamma)
+    if key not in _TEXTURES:
+        try:
+            _TEXTURES[key] = read_texture(path, gamma=gamma)
+        except (OSError, ValueError) as e:
+            raise ResourceError(f"cannot read texture {str(path)!r}: {e}") from None
+    return _TEXTURES[key]
