@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from displacement.fields import Field, frac, repeat_knots
+from displacement.fields import Field, float2, frac, repeat_knots
 from displacement.state import ShadingState
 from displacement.vector import modify_normal
 
@@ -172,13 +172,6 @@ def bubble_point(fraction, repeat, ba: BubbleArgs) -> np.ndarray:
     return np.stack([x, y], axis=-1)
 
 
-def _float2(value, name: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.ndim == 0:
-        arr = np.full(2, float(arr))
-    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be a float2: one or two finite numbers, got {value!r}")
-    return arr
 
 
 def displace_with_bubble(repeat, ba: BubbleArgs) -> Field:
@@ -212,7 +205,7 @@ def displace_with_bubble(repeat, ba: BubbleArgs) -> Field:
     """
     if not isinstance(ba, BubbleArgs):
         raise ValueError("ba must be a BubbleArgs from get_bubble_args(radius, height)")
-    repeat = _float2(repeat, "repeat")
+    repeat = float2(repeat, "repeat")
     if repeat[0] > 0:
         index = 0
     elif repeat[1] > 0:
@@ -276,7 +269,7 @@ def normalize_grid(grid_count, repeat, ba: BubbleArgs, normalize_grid: bool = Tr
     >>> normalize_grid((4.0, 4.0), (1.0, 2.0), ba).round(6).tolist()
     [4.0, 6.283185]
     """
-    grid_count = _float2(grid_count, "grid_count")
-    repeat = _float2(repeat, "repeat")
+    grid_count = float2(grid_count, "grid_count")
+    repeat = float2(repeat, "repeat")
     scale = np.where(bool(normalize_grid) & (repeat != 1.0), ba.total_length, 1.0)
     return grid_count * scale

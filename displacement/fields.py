@@ -30,6 +30,7 @@ __all__ = [
     "Field",
     "FIELDS",
     "frac",
+    "float2",
     "varying",
     "repeat_knots",
     "displacement_direction",
@@ -61,6 +62,22 @@ def frac(x):
     """
     x = np.asarray(x, dtype=np.float64)
     return x - np.floor(x)
+
+
+def float2(value, name: str) -> np.ndarray:
+    """A uniform ``float2`` argument: a scalar (MDL's ``float2(x)``) or two finite numbers.
+
+    Examples
+    --------
+    >>> float2(3, "repeat").tolist(), float2((1, 2), "scale").tolist()
+    ([3.0, 3.0], [1.0, 2.0])
+    """
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        arr = np.full(2, float(arr))
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be a float2: one or two finite numbers, got {value!r}")
+    return arr
 
 
 def varying(value: Any, state: ShadingState) -> np.ndarray:

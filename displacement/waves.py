@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from displacement.fields import Field, frac
+from displacement.fields import Field, float2, frac
 from displacement.state import ShadingState
 
 __all__ = [
@@ -112,14 +112,6 @@ def sinusoid2(f, frequency=1.0, minval=-1.0, maxval=1.0):
     return np.where(frequency == 0.0, 0.0, sinusoid(f, frequency, minval, maxval))
 
 
-def _float2(value, name: str) -> np.ndarray:
-    """A ``float2`` argument: a scalar (MDL's ``float2(x)``) or two finite numbers."""
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.ndim == 0:
-        arr = np.full(2, float(arr))
-    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be a float2: one or two finite numbers, got {value!r}")
-    return arr
 
 
 def uv_wave(uv, frequency=1.0, minval=-1.0, maxval=1.0):
@@ -145,9 +137,9 @@ def uv_wave(uv, frequency=1.0, minval=-1.0, maxval=1.0):
     if isinstance(uv, ShadingState):
         uv = uv.uv
     uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
-    frequency = _float2(frequency, "frequency")
-    minval = _float2(minval, "minval")
-    maxval = _float2(maxval, "maxval")
+    frequency = float2(frequency, "frequency")
+    minval = float2(minval, "minval")
+    maxval = float2(maxval, "maxval")
     u_component = sinusoid(uv[:, 0], frequency[0], minval[0], maxval[0])
     v_component = sinusoid(uv[:, 1], frequency[1], minval[1], maxval[1])
     return u_component + v_component
@@ -175,8 +167,8 @@ def waves_as_displacement(frequency=1.0, distance=0.1) -> Field:
     >>> (waves_as_displacement((0.0, 4.0), (0.0, 0.1))(s).round(12) + 0.0).tolist()
     [[0.0, 0.0, 0.1], [0.0, 0.0, -0.1]]
     """
-    frequency = _float2(frequency, "frequency")
-    distance = _float2(distance, "distance")
+    frequency = float2(frequency, "frequency")
+    distance = float2(distance, "distance")
 
     def function(state: ShadingState) -> np.ndarray:
         displacement_distance = uv_wave(state.uv, frequency, -distance, distance)
@@ -206,8 +198,8 @@ def waves(distance=0.1, frequency=1.0, use_displacement: bool = True) -> Field:
     >>> waves((0.0, 0.1), (0.0, 4.0), use_displacement=False)(s).tolist()
     [[0.0, 0.0, 0.0]]
     """
-    distance = _float2(distance, "distance")
-    frequency = _float2(frequency, "frequency")
+    distance = float2(distance, "distance")
+    frequency = float2(frequency, "frequency")
     use_displacement = bool(use_displacement)
 
     if use_displacement:
