@@ -1,10 +1,20 @@
-"""Render: a small path tracer that evaluates MDL's material model (distribution functions first).
+"""Render: a small Embree path tracer that evaluates MDL's material model.
 
 Conventions for directions and frames: :mod:`render.frame`.  Interfaces: :mod:`render.bsdf`.
+``render.render(scene, spp=...)`` renders a scene file or :class:`render.scene.Scene`
+(see :func:`render.integrator.render`).
 """
 
 from render import df
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe
 from render.frame import Frame
 
-__all__ = ["df", "Bsdf", "BsdfSample", "Edf", "EdfSample", "Lobe", "Frame"]
+__all__ = ["df", "Bsdf", "BsdfSample", "Edf", "EdfSample", "Lobe", "Frame", "render"]
+
+
+def render(scene, **options):
+    """Render a scene (a TOML path or a Scene); returns the Film.  See
+    :func:`render.integrator.render` for the options."""
+    from render.integrator import render as _render
+
+    return _render(scene, **options)

@@ -13,6 +13,7 @@ BENCHMARKS = {
     "pwc_speed.py": ["--points", "500", "--positions", "20000"],
     "bake_roundtrip.py": ["--sizes", "16", "--samples", "2000"],
     "dicing.py": ["--quick", "--size", "64", "--samples", "500", "--n-max", "64"],
+    "render_vs_mitsuba.py": ["--quick"],
 }
 
 

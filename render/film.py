@@ -1,0 +1,243 @@
+"""The film: accumulates samples per pixel and writes linear EXR (RGBA + AOVs) and sRGB PNG.
+
+Pixel samples are box-filtered (each sample counts for the pixel it was drawn in, as
+Mitsuba's ``box`` filter).  Besides colour and alpha the film keeps arbitrary output
+variables (AOVs) averaged over a pixel's samples: ``albedo`` (RGB, the BSDF's
+directional albedo at the first visible surface), ``normal`` (world-space shading
+normal), ``depth`` (distance along the camera's viewing axis; 0 where nothing was hit),
+``uv`` (texture coordinates) and ``object_id`` (the index of the object seen by the
+pixel's first sample, -1 for none; not averaged).
+
+EXR layout (OpenEXR 3.x API): channels ``R, G, B, A`` and one layer per AOV:
+``albedo.R/G/B``, ``normal.X/Y/Z``, ``depth.Z``, ``uv.U/V``, ``object_id.id``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["Film", "AOVS", "linear_to_srgb", "read_exr"]
+
+#: the AOVs a film can keep, and their channel names in the EXR.
+AOVS = {
+    "albedo": ("R", "G", "B"),
+    "normal": ("X", "Y", "Z"),
+    "depth": ("Z",),
+    "uv": ("U", "V"),
+    "object_id": ("id",),
+}
+
+
+def linear_to_srgb(x: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function (IEC 61966-2-1) of linear values clamped to [0, 1].
+
+    Examples
+    --------
+    >>> np.round(linear_to_srgb(np.array([0.0, 0.0031308, 0.5, 1.0, 7.0])), 6).tolist()
+    [0.0, 0.04045, 0.735357, 1.0, 1.0]
+    """
+    x = np.clip(np.nan_to_num(np.asarray(x, dtype=np.float64)), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+class Film:
+    """Sums of samples per pixel.
+
+    Parameters
+    ----------
+    width, height : int
+    aovs : iterable of str
+        Names from :data:`AOVS` to keep.
+
+    Examples
+    --------
+    >>> f = Film(2, 1)
+    >>> f.add(np.array([0, 0, 1]), np.array([[1.0, 0, 0], [3.0, 0, 0], [0, 0, 2.0]]), np.ones(3))
+    >>> f.rgb()[0].tolist(), f.spp.tolist()
+    ([[2.0, 0.0, 0.0], [0.0, 0.0, 2.0]], [[2, 1]])
+    """
+
+    def __init__(self, width: int, height: int, aovs=()):
+        self.width, self.height = int(width), int(height)
+        unknown = set(aovs) - set(AOVS)
+        if unknown:
+            raise ValueError(f"unknown AOV {sorted(unknown)[0]!r}: choose from {', '.join(AOVS)}")
+        self.aov_names = [a for a in AOVS if a in set(aovs)]
+        n = self.width * self.height
+        self._rgb = np.zeros((n, 3))
+        self._alpha = np.zeros(n)
+        self._count = np.zeros(n, dtype=np.int64)
+        self._aov = {a: np.zeros((n, len(AOVS[a]))) for a in self.aov_names if a != "object_id"}
+        self._object_id = np.full(n, -1, dtype=np.int32)
+        self._object_id_set = np.zeros(n, dtype=bool)
+        #: render statistics (filled by the integrator)
+        self.stats: dict = {}
+        self._denoised: np.ndarray | None = None
+
+    @property
+    def pixel_count(self) -> int:
+        return self.width * self.height
+
+    @property
+    def spp(self) -> np.ndarray:
+        """(h, w) int64: samples accumulated per pixel."""
+        return self._count.reshape(self.height, self.width).copy()
+
+    def add(
+        self, pixel: np.ndarray, rgb: np.ndarray, alpha: np.ndarray, aovs: dict | None = None
+    ) -> None:
+        """Accumulate samples.
+
+        Parameters
+        ----------
+        pixel : (n,) int64
+            Pixel indices ``y * width + x``.
+        rgb : (n, 3) float64
+            Radiance; non-finite values are counted as 0 (and reported in ``stats``).
+        alpha : (n,) float64
+        aovs : dict, optional
+            Name -> (n, k) values; ``object_id`` -> (n,) ints (kept from the pixel's
+            first added sample).
+        """
+        pixel = np.asarray(pixel, dtype=np.int64)
+        m = self.pixel_count
+        bad = ~np.all(np.isfinite(rgb), axis=1)
+        if np.any(bad):
+            self.stats["nonfinite_samples"] = self.stats.get("nonfinite_samples", 0) + int(
+                bad.sum()
+            )
+            rgb = np.where(bad[:, None], 0.0, rgb)
+        for c in range(3):
+            self._rgb[:, c] += np.bincount(pixel, rgb[:, c], minlength=m)
+        self._alpha += np.bincount(pixel, alpha, minlength=m)
+        self._count += np.bincount(pixel, minlength=m)
+        aovs = aovs or {}
+        for name, acc in self._aov.items():
+            if name in aovs:
+                val = np.asarray(aovs[name], dtype=np.float64).reshape(len(pixel), -1)
+                for c in range(acc.shape[1]):
+                    acc[:, c] += np.bincount(pixel, val[:, c], minlength=m)
+        if "object_id" in self.aov_names and "object_id" in aovs:
+            ids = np.asarray(aovs["object_id"], dtype=np.int32)
+            # the first sample of each pixel in this batch, for pixels not yet set
+            first = np.unique(pixel, return_index=True)[1]
+            p, v = pixel[first], ids[first]
+            new = ~self._object_id_set[p]
+            self._object_id[p[new]] = v[new]
+            self._object_id_set[p[new]] = True
+        self._denoised = None
+
+    def _mean(self, acc: np.ndarray) -> np.ndarray:
+        c = np.maximum(self._count, 1).astype(np.float64)
+        return acc / (c[:, None] if acc.ndim == 2 else c)
+
+    def rgb(self) -> np.ndarray:
+        """(h, w, 3) float64: mean radiance per pixel (the denoised one after :meth:`denoise`)."""
+        if self._denoised is not None:
+            return self._denoised.copy()
+        return self._mean(self._rgb).reshape(self.height, self.width, 3)
+
+    def alpha(self) -> np.ndarray:
+        """(h, w) float64: mean coverage (1 where a surface was hit, 0 for the background)."""
+        return self._mean(self._alpha).reshape(self.height, self.width)
+
+    def aov(self, name: str) -> np.ndarray:
+        """(h, w, k) float64 (``object_id``: (h, w) int32) of an AOV this film keeps."""
+        if name not in self.aov_names:
+            raise ValueError(
+                f"this film does not keep the AOV {name!r} (it keeps {self.aov_names})"
+            )
+        if name == "object_id":
+            return self._object_id.reshape(self.height, self.width).copy()
+        return self._mean(self._aov[name]).reshape(self.height, self.width, -1)
+
+    def denoise(self) -> np.ndarray:
+        """Denoise the colour with Open Image Denoise (``pyoidn``), guided by the albedo and
+        normal AOVs when the film keeps them; afterwards :meth:`rgb` returns the result.
+
+        Raises
+        ------
+        ImportError
+            ``pyoidn`` is not installed (``pip install pyoidn``).
+        """
+        try:
+            import pyoidn
+        except ImportError:
+            raise ImportError("denoising needs Open Image Denoise: pip install pyoidn") from None
+        self._denoised = None
+        color = np.ascontiguousarray(self.rgb(), dtype=np.float32)
+        kw = {}
+        if "albedo" in self.aov_names:
+            kw["albedo"] = np.ascontiguousarray(np.clip(self.aov("albedo"), 0, 1), dtype=np.float32)
+            if "normal" in self.aov_names:
+                kw["normal"] = np.ascontiguousarray(self.aov("normal"), dtype=np.float32)
+        out = pyoidn.denoise(color, hdr=True, quality="high", **kw)
+        self._denoised = np.nan_to_num(np.asarray(out, dtype=np.float64)).reshape(
+            self.height, self.width, 3
+        )
+        return self._denoised.copy()
+
+    # ------------------------------------------------------------------------- output
+    def write_exr(self, path, aovs=None, half: bool = False) -> None:
+        """Write linear RGBA and AOV layers to an OpenEXR file (ZIP compression).
+
+        Parameters
+        ----------
+        path : str or Path
+        aovs : list of str or None
+            Which kept AOVs to write (None: all kept).
+        half : bool
+            Store colour and AOVs as 16-bit half floats (object ids stay 32-bit floats).
+        """
+        import OpenEXR
+
+        names = self.aov_names if aovs is None else list(aovs)
+        dt = np.float16 if half else np.float32
+        rgb = self.rgb()
+        channels = {
+            "R": rgb[..., 0].astype(dt),
+            "G": rgb[..., 1].astype(dt),
+            "B": rgb[..., 2].astype(dt),
+            "A": self.alpha().astype(dt),
+        }
+        for name in names:
+            val = self.aov(name)
+            if name == "object_id":
+                channels["object_id.id"] = val.astype(np.float32)
+                continue
+            for c, ch in enumerate(AOVS[name]):
+                channels[f"{name}.{ch}"] = np.ascontiguousarray(val[..., c]).astype(dt)
+        channels = {k: np.ascontiguousarray(v) for k, v in channels.items()}
+        hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        with OpenEXR.File(hdr, channels) as f:
+            f.write(str(path))
+
+    def write_png(self, path, exposure: float = 0.0) -> None:
+        """Write an 8-bit sRGB preview (colour times ``2**exposure``, clamped)."""
+        from PIL import Image
+
+        img = linear_to_srgb(self.rgb() * 2.0**exposure)
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(np.round(img * 255.0).astype(np.uint8), "RGB").save(str(path))
+
+
+def read_exr(path) -> dict[str, np.ndarray]:
+    """Channels of an EXR file as float arrays: ``"RGBA"`` -> (h, w, 4) (or ``"RGB"``), and
+    each other channel by its full name (``"albedo.R"``...) -> (h, w).
+
+    Parameters
+    ----------
+    path : str or Path
+    """
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = f.channels()
+        out = {name: np.asarray(c.pixels, dtype=np.float64) for name, c in ch.items()}
+    if all(k in out for k in "RGB"):
+        keys = [k for k in "RGBA" if k in out]
+        out["RGBA" if "A" in out else "RGB"] = np.stack([out[k] for k in keys], axis=-1)
+    return out

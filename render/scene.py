@@ -1,0 +1,1131 @@
+"""Scenes: TOML scene files, objects with MDL materials, and the one Embree scene built from them.
+
+A scene file has a ``[camera]``, a ``[render]`` table of settings, ``[[lights]]`` and
+``[[objects]]``; every material is an MDL call expression as the Handbook prints it in
+its figure captions, parsed by :mod:`render.expr`.  Example (the Handbook's stage)::
+
+    [camera]
+    type = "pinhole"                # or "orthographic" (then ortho_height = ...)
+    position = [0.5, 1.2, 3.2]
+    look_at = [0.5, 0.45, 0.0]
+    fov = 35.0                      # vertical, degrees
+
+    [render]
+    resolution = [256, 192]
+    spp = 64                        # or time = 30.0 (seconds)
+    max_depth = 8
+    seed = 0
+
+    [[lights]]
+    type = "quad"                   # an emissive quad: an area light (diffuse_edf)
+    center = [-1.5, 3.0, 1.5]
+    normal = [0.5, -1.0, -0.3]      # the direction it faces
+    size = [1.0, 1.0]
+    radiance = [6.0, 6.0, 6.0]      # or intensity = MDL radiant exitance (= pi radiance)
+
+    [[objects]]
+    name = "square"
+    surface = "square"              # or { type = "sphere", radius = 0.5 }, or mesh = "x.obj"
+    translate = [-0.6, 0.0, 0.0]
+    rotate = [0.0, 20.0, 0.0]       # degrees about x, then y, then z
+    scale = 1.0
+    material = "waves(distance: float2(0.02, 0.02), frequency: float2(10.0, 10.0))"
+
+Light types: ``point`` (position, intensity), ``spot`` (position, direction or look_at,
+intensity, cutoff_angle, beam_width), ``directional`` (direction, irradiance),
+``environment`` (radiance, or file = lat-long EXR with scale and rotation), ``quad``
+(center, normal, size, up, radiance or intensity) and ``sphere`` (center, radius,
+radiance or intensity).  Units: :mod:`render.lights`.
+
+Surfaces by name (:func:`displacement.view.make_surface`: ``square``, ``plane``,
+``sphere``, ``cylinder``, ``torus``, ``cube``), or as a table ``{ type = NAME, ... }``
+whose other keys are the constructor's parameters (``square`` -> UnitSquare, ``plane``
+-> Plane, ``sphere`` -> UVSphere, ``cylinder``, ``torus``, ``cube``).  ``mesh = PATH``
+loads a file with trimesh (relative to the scene file; without texture coordinates its
+uv is 0 everywhere).
+
+Errors raise :class:`SceneError`, whose message starts with ``file:line:col:``; a bad
+material expression is reported at the column of the expression inside the TOML file.
+
+Geometry (:meth:`Scene.build`): only objects whose material has a displacement are
+diced, by :func:`displacement.dice.dice` for this scene's camera; the others use their
+base surface's ``base_mesh``.  All triangles go into ONE Embree scene (float32), one
+geometry per object (Embree's ``geomID`` is the object id), with float64 attribute
+tables (positions, shading normals, uv, tangents) interpolated at hits.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from render.camera import Camera
+from render.lights import (
+    ConstantEnvironment,
+    DirectionalLight,
+    LatLongEnvironment,
+    Light,
+    PointLight,
+    SpotLight,
+)
+
+__all__ = [
+    "SceneError",
+    "RenderSettings",
+    "SceneObject",
+    "Scene",
+    "Geometry",
+    "load_scene",
+    "parse_scene",
+    "make_transform",
+    "SURFACE_TYPES",
+]
+
+#: surface names accepted in ``surface = { type = NAME, ... }`` -> displacement.surfaces class
+SURFACE_TYPES = {
+    "square": "UnitSquare",
+    "plane": "Plane",
+    "sphere": "UVSphere",
+    "cylinder": "Cylinder",
+    "torus": "Torus",
+    "cube": "Cube",
+}
+
+#: base-mesh resolution (cells in u, v) of curved parametric surfaces that are not diced
+_BASE_RESOLUTION = {"UVSphere": (128, 64), "Cylinder": (128, 1), "Torus": (128, 48)}
+
+
+class SceneError(ValueError):
+    """A scene file (or scene description) is wrong; ``str()`` is ``file:line:col: message``.
+
+    Attributes
+    ----------
+    path : str
+    line, column : int
+        1-based; 0 when unknown.
+    message : str
+    """
+
+    def __init__(self, message: str, path: str = "<scene>", line: int = 0, column: int = 0):
+        self.path, self.line, self.column, self.message = str(path), int(line), int(column), message
+        loc = self.path
+        if self.line:
+            loc += f":{self.line}"
+            if self.column:
+                loc += f":{self.column}"
+        super().__init__(f"{loc}: {message}")
+
+
+@dataclass
+class RenderSettings:
+    """The ``[render]`` table.
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in pixels (``resolution = [w, h]``).
+    spp : int
+        Samples per pixel (ignored when ``time`` is given).
+    time : float or None
+        Time budget in seconds: render passes of ``spp_per_pass`` samples until it is
+        spent (at least one pass).
+    max_depth : int
+        Longest path, in vertices after the camera (Mitsuba's ``max_depth``: 1 shows
+        emitters only, 2 is direct lighting); -1 for unlimited (Russian roulette ends
+        the paths).
+    rr_depth : int
+        Depth from which Russian roulette may end paths.
+    seed : int
+        Same seed, same image.
+    dicing_rate, dicing_tolerance : float
+        Pixels; passed to :func:`displacement.dice.dice`.
+    spp_per_pass : int
+        Samples per pixel per pass (the unit of progress and of the time budget).
+    """
+
+    width: int = 256
+    height: int = 256
+    spp: int = 16
+    time: float | None = None
+    max_depth: int = 8
+    rr_depth: int = 5
+    seed: int = 0
+    dicing_rate: float = 1.0
+    dicing_tolerance: float = 0.5
+    spp_per_pass: int = 1
+
+    def validate(self) -> RenderSettings:
+        for name in ("width", "height", "spp", "spp_per_pass"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
+                raise ValueError(f"{name} must be a whole number >= 1, got {v!r}")
+        if self.time is not None and not (isinstance(self.time, (int, float)) and self.time > 0):
+            raise ValueError(f"time must be a number of seconds > 0, got {self.time!r}")
+        if not isinstance(self.max_depth, (int, np.integer)) or (
+            self.max_depth < 1 and self.max_depth != -1
+        ):
+            raise ValueError(
+                f"max_depth must be >= 1 (or -1 for unlimited), got {self.max_depth!r}"
+            )
+        if not isinstance(self.rr_depth, (int, np.integer)) or self.rr_depth < 1:
+            raise ValueError(f"rr_depth must be >= 1, got {self.rr_depth!r}")
+        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise ValueError(f"seed must be a whole number >= 0, got {self.seed!r}")
+        for name in ("dicing_rate", "dicing_tolerance"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a number of pixels > 0, got {v!r}")
+        return self
+
+
+@dataclass
+class SceneObject:
+    """One object: a base surface (or mesh), a transform and a material.
+
+    Parameters
+    ----------
+    surface
+        A :mod:`displacement.surfaces` surface (parametric with ``state_at_uv``, or a
+        mesh surface).
+    material
+        A material with ``shade(state)`` and ``geometry.displacement`` (see
+        :mod:`render.material`).
+    transform : (4, 4) float64
+        Object to world.
+    name : str
+    resolution : (int, int) or None
+        Cells of the base mesh of an undiced parametric surface (None: a default that
+        keeps curved silhouettes smooth at the usual image sizes).
+    material_text : str
+        The MDL expression the material came from (for messages and the gallery).
+    """
+
+    surface: Any
+    material: Any
+    transform: np.ndarray = field(default_factory=lambda: np.eye(4))
+    name: str = "object"
+    resolution: tuple[int, int] | None = None
+    material_text: str = ""
+
+    def __post_init__(self) -> None:
+        from displacement.dice.evaluator import check_transform
+
+        self.transform = check_transform(self.transform)
+        self.linear = self.transform[:3, :3]
+        self.inv_linear = np.linalg.inv(self.linear)
+        self.translation = self.transform[:3, 3]
+
+    @property
+    def displacement(self):
+        """The material's displacement field, or None."""
+        geometry = getattr(self.material, "geometry", None)
+        return getattr(geometry, "displacement", None)
+
+    # object <-> world (row vectors)
+    def to_object_points(self, p: np.ndarray) -> np.ndarray:
+        """World points (n, 3) in object space."""
+        return (p - self.translation) @ self.inv_linear.T
+
+    def to_object_normals(self, n: np.ndarray) -> np.ndarray:
+        """World normals (n, 3) in object space (unit; normals transform by L^T)."""
+        return _unit_rows(n @ self.linear)
+
+    def to_object_vectors(self, v: np.ndarray) -> np.ndarray:
+        """World tangent vectors (n, 3) in object space (unit)."""
+        return _unit_rows(v @ self.inv_linear.T)
+
+    def to_world_normals(self, n: np.ndarray) -> np.ndarray:
+        """Object-space normals (n, 3) in world space (unit)."""
+        return _unit_rows(n @ self.inv_linear)
+
+
+def _unit_rows(v: np.ndarray) -> np.ndarray:
+    from render.numerics import unitize
+
+    u, ok = unitize(v)
+    return np.where(ok[:, None], u, np.array([0.0, 0.0, 1.0]))
+
+
+@dataclass
+class Scene:
+    """A camera, lights, objects and render settings.
+
+    Parameters
+    ----------
+    camera : Camera
+        Its ``width``/``height`` are the image size.
+    objects : list of SceneObject
+    lights : list of Light
+        Non-geometric lights (point, spot, directional, environment); emissive objects
+        are area lights automatically.
+    settings : RenderSettings
+    path : str
+        Where the scene came from (for messages).
+    """
+
+    camera: Camera
+    objects: list[SceneObject]
+    lights: list[Light] = field(default_factory=list)
+    settings: RenderSettings = field(default_factory=RenderSettings)
+    path: str = "<scene>"
+
+    def build(self, progress: bool = False) -> Geometry:
+        """Tessellate (dice displaced objects) and build the Embree scene."""
+        return Geometry.build(self, progress=progress)
+
+
+# ----------------------------------------------------------------------------- geometry
+@dataclass
+class Geometry:
+    """Every triangle of a scene in one Embree scene, with float64 attribute tables.
+
+    Vertex tables are global (all objects concatenated); ``faces`` index them.  Embree's
+    ``geomID`` is the object index and ``primID`` the triangle within the object:
+    the global triangle is ``face_offset[geomID] + primID``.
+
+    Attributes
+    ----------
+    vertices, normals, tangent_u, tangent_v : (v, 3) float64
+        World positions, unit shading normals and unit tangents.
+    uv : (v, 2) float64
+    faces : (f, 3) int64
+    face_object : (f,) int32
+    face_normal : (f, 3) float64
+        Unit geometric normals, flipped to the side of the vertex normals.
+    face_offset : (k + 1,) int64
+        First triangle of each object.
+    extent : float
+        Diagonal of the scene's bounding box (ray offsets scale with it).
+    center : (3,) float64
+    stats : list of dict
+        Per object: triangle count, whether it was diced, and the dicer's statistics.
+    """
+
+    embree: Any
+    vertices: np.ndarray
+    normals: np.ndarray
+    tangent_u: np.ndarray
+    tangent_v: np.ndarray
+    uv: np.ndarray
+    faces: np.ndarray
+    face_object: np.ndarray
+    face_normal: np.ndarray
+    face_offset: np.ndarray
+    extent: float
+    center: np.ndarray
+    stats: list
+
+    @classmethod
+    def build(cls, scene: Scene, progress: bool = False) -> Geometry:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+
+        parts = []
+        stats = []
+        for obj in scene.objects:
+            part, st = _object_triangles(obj, scene.camera, scene.settings)
+            st["name"] = obj.name
+            parts.append(part)
+            stats.append(st)
+        if not parts:
+            raise ValueError("the scene has no objects")
+        v_off = np.cumsum([0] + [len(p[0]) for p in parts])
+        f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
+        vertices = np.concatenate([p[0] for p in parts])
+        faces = np.concatenate([p[1] + v_off[i] for i, p in enumerate(parts)]).astype(np.int64)
+        uv = np.concatenate([p[2] for p in parts])
+        normals = np.concatenate([p[3] for p in parts])
+        tu = np.concatenate([p[4] for p in parts])
+        tv = np.concatenate([p[5] for p in parts])
+        face_object = np.repeat(np.arange(len(parts), dtype=np.int32), np.diff(f_off))
+        # geometric normals, oriented like the interpolated shading normals
+        c = vertices[faces]
+        ng = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+        nsum = normals[faces].sum(axis=1)
+        ng = np.where((np.einsum("ij,ij->i", ng, nsum) < 0)[:, None], -ng, ng)
+        from render.numerics import unitize
+
+        ng_u, ok = unitize(ng)
+        ns_u, ok2 = unitize(nsum)
+        face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
+        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+        extent = float(np.linalg.norm(hi - lo)) or 1.0
+        embree = rtcore_scene.EmbreeScene()
+        for p in parts:
+            v32 = np.ascontiguousarray(p[0], dtype=np.float32)
+            f32 = np.ascontiguousarray(p[1], dtype=np.int32)
+            TriangleMesh(embree, v32, f32)
+        # one tiny run builds the BVH before any thread uses the scene
+        embree.run(
+            np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32) / np.float32(np.sqrt(3))
+        )
+        return cls(
+            embree,
+            vertices,
+            normals,
+            tu,
+            tv,
+            uv,
+            faces,
+            face_object,
+            face_normal,
+            f_off,
+            extent,
+            0.5 * (lo + hi),
+            stats,
+        )
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.faces)
+
+    def interpolate(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
+        """Attributes at points of triangles (Embree's barycentrics ``u``, ``v``).
+
+        Parameters
+        ----------
+        face : (n,) int64
+            Global triangle indices.
+        b1, b2 : (n,) float64
+            ``p = (1 - b1 - b2) v0 + b1 v1 + b2 v2``.
+
+        Returns
+        -------
+        position, normal, tangent_u, tangent_v : (n, 3) float64
+            World space; normal and tangents not renormalised.
+        uv : (n, 2) float64
+        """
+        f = self.faces[face]
+        b0 = 1.0 - b1 - b2
+        table = self.packed
+        # one gather per corner of all 14 attribute columns
+        a = b0[:, None] * table[f[:, 0]]
+        a += b1[:, None] * table[f[:, 1]]
+        a += b2[:, None] * table[f[:, 2]]
+        return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12], a[:, 12:14]
+
+    @property
+    def packed(self) -> np.ndarray:
+        """(v, 14) float64: positions, normals, tangent_u, tangent_v, uv side by side."""
+        if getattr(self, "_packed", None) is None:
+            self._packed = np.ascontiguousarray(
+                np.concatenate(
+                    [self.vertices, self.normals, self.tangent_u, self.tangent_v, self.uv], axis=1
+                )
+            )
+        return self._packed
+
+
+def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings):
+    """World-space triangles and per-vertex attributes of one object.
+
+    Returns
+    -------
+    (vertices, faces, uv, normals, tangent_u, tangent_v), stats
+    """
+    from displacement.dice import dice, is_mesh_surface
+
+    field_ = obj.displacement
+    surface = obj.surface
+    if field_ is not None:
+        mesh = dice(
+            surface,
+            field_,
+            camera,
+            obj.transform,
+            dicing_rate=settings.dicing_rate,
+            tolerance=settings.dicing_tolerance,
+        )
+        n = _unit_rows(mesh.normals)
+        tu = _unit_rows(mesh.tangents)
+        tv = _unit_rows(np.cross(n, tu))
+        st = {
+            "diced": True,
+            "triangles": mesh.triangle_count,
+            "dice_time_s": mesh.stats.get("time_s"),
+            "max_error_px": mesh.stats.get("max_error_px"),
+        }
+        return (mesh.vertices, mesh.faces.astype(np.int64), mesh.uv, n, tu, tv), st
+    if is_mesh_surface(surface):
+        base = surface.base_mesh()
+        faces = np.asarray(base.faces, dtype=np.int64)
+        nf = len(faces)
+        # per-corner attributes from the surface (per-face frames of a mesh surface)
+        face_index = np.repeat(np.arange(nf), 3)
+        bary = np.tile(np.eye(3), (nf, 1))
+        state = surface.state_at(face_index, bary)
+        pos = state.position
+        new_faces = np.arange(3 * nf, dtype=np.int64).reshape(nf, 3)
+    else:
+        res = obj.resolution or _BASE_RESOLUTION.get(type(surface).__name__)
+        base = surface.base_mesh(*res) if res is not None else surface.base_mesh()
+        uv = np.asarray(base.visual.uv, dtype=np.float64)
+        state = surface.state_at_uv(uv)
+        pos = np.asarray(base.vertices, dtype=np.float64)
+        new_faces = np.asarray(base.faces, dtype=np.int64)
+    verts = pos @ obj.linear.T + obj.translation
+    n = obj.to_world_normals(state.normal)
+    tu = _unit_rows(state.tangent_u @ obj.linear.T)
+    tv = _unit_rows(state.tangent_v @ obj.linear.T)
+    st = {"diced": False, "triangles": len(new_faces)}
+    return (verts, new_faces, state.uv, n, tu, tv), st
+
+
+# ------------------------------------------------------------------------------ parsing
+def make_transform(translate=(0.0, 0.0, 0.0), rotate=(0.0, 0.0, 0.0), scale=1.0) -> np.ndarray:
+    """Object-to-world matrix: scale, then rotate about x, y, z (degrees), then translate.
+
+    Examples
+    --------
+    >>> m = make_transform(translate=[1, 0, 0], rotate=[0, 90, 0], scale=2)
+    >>> np.round(m @ [1.0, 0.0, 0.0, 1.0], 12).tolist()    # +x turns to -z, scaled, moved
+    [1.0, 0.0, -2.0, 1.0]
+    >>> make_transform(scale=0)
+    Traceback (most recent call last):
+    ...
+    ValueError: scale must be non-zero numbers, got 0
+    """
+    t = np.asarray(translate, dtype=np.float64)
+    r = np.radians(np.asarray(rotate, dtype=np.float64))
+    s = np.asarray(scale, dtype=np.float64)
+    if t.shape != (3,) or not np.all(np.isfinite(t)):
+        raise ValueError(f"translate must be [x, y, z], got {translate!r}")
+    if r.shape != (3,) or not np.all(np.isfinite(r)):
+        raise ValueError(f"rotate must be [x, y, z] degrees, got {rotate!r}")
+    s = np.broadcast_to(s, (3,)) if s.ndim == 0 else s
+    if s.shape != (3,) or not np.all(np.isfinite(s)) or np.any(s == 0):
+        raise ValueError(f"scale must be non-zero numbers, got {scale!r}")
+    cx, cy, cz = np.cos(r)
+    sx, sy, sz = np.sin(r)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    m = np.eye(4)
+    m[:3, :3] = rz @ ry @ rx @ np.diag(s)
+    m[:3, 3] = t
+    return m
+
+
+class _Locator:
+    """Line and column of tables and keys in TOML text (tomllib keeps no positions)."""
+
+    _HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z0-9_.\-]+)\s*\]\]?")
+
+    def __init__(self, text: str):
+        self.text = text
+        self.lines = text.splitlines()
+        self.line_start = [0]
+        for ln in text.splitlines(keepends=True):
+            self.line_start.append(self.line_start[-1] + len(ln))
+        # sections: (name, index or None, first line (1-based), last line)
+        self.sections: list[list] = [["", None, 1, len(self.lines)]]
+        counts: dict[str, int] = {}
+        for i, ln in enumerate(self.lines, start=1):
+            m = self._HEADER.match(ln)
+            if not m or _in_multiline_string(text, self.line_start[i - 1]):
+                continue
+            name = m.group(2)
+            if m.group(1) == "[[":
+                idx = counts.get(name, -1) + 1
+                counts[name] = idx
+            else:
+                head = name.split(".")[0]
+                idx = counts.get(head) if head != name else None
+            self.sections[-1][3] = i - 1
+            self.sections.append([name, idx, i, len(self.lines)])
+
+    def section(self, name: str, index: int | None = None) -> tuple[int, int]:
+        """(first, last) line of a table (or of the index-th array table)."""
+        for s in self.sections:
+            if s[0] == name and (index is None or s[1] == index):
+                return s[2], s[3]
+        return 0, 0
+
+    def key(self, name: str, index: int | None, key: str) -> tuple[int, int]:
+        """(line, column) of ``key =`` in a table, or of the table header, or (0, 0)."""
+        pat = re.compile(r"^\s*" + re.escape(key) + r"\s*=")
+        for s in self.sections:
+            if not (s[0] == name or s[0].startswith(name + ".")) or (
+                index is not None and s[1] != index
+            ):
+                continue
+            for ln in range(s[2], s[3] + 1):
+                if pat.match(self.lines[ln - 1]):
+                    return ln, len(self.lines[ln - 1]) - len(self.lines[ln - 1].lstrip()) + 1
+        first, _ = self.section(name, index)
+        return first, 1 if first else 0
+
+    def value_position(self, line: int, offset: int) -> tuple[int, int]:
+        """(line, column) of the character ``offset`` characters into the string value
+        on ``line`` (after the opening quotes), when the string has no escapes."""
+        if not line:
+            return 0, 0
+        start = self.line_start[line - 1]
+        m = re.search(r"=\s*('''|\"\"\"|'|\")", self.text[start:])
+        if not m:
+            return line, 0
+        quote = m.group(1)
+        pos = start + m.end()
+        if len(quote) == 3 and self.text[pos : pos + 1] == "\n":
+            pos += 1  # a newline right after the opening quotes is trimmed
+        end = self.text.find(quote, pos)
+        raw = self.text[pos : end if end >= 0 else len(self.text)]
+        if quote.startswith('"') and "\\" in raw[:offset]:
+            return line, 0
+        at = pos + min(offset, len(raw))
+        ln = self.text.count("\n", 0, at) + 1
+        return ln, at - self.line_start[ln - 1] + 1
+
+
+def _in_multiline_string(text: str, pos: int) -> bool:
+    """Whether ``pos`` is inside a ''' or \"\"\" string (counts delimiters before it)."""
+    before = text[:pos]
+    return (before.count('"""') % 2 == 1) or (before.count("'''") % 2 == 1)
+
+
+def load_scene(path, overrides: dict | None = None) -> Scene:
+    """Read a TOML scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+    overrides : dict, optional
+        ``[render]`` settings to replace (``spp``, ``time``, ``seed``...).
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        With ``file:line:col`` of the problem.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as e:
+        raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
+    return parse_scene(text, str(path), overrides=overrides, base_dir=path.parent)
+
+
+def parse_scene(
+    text: str, path: str = "<scene>", overrides: dict | None = None, base_dir: Path | None = None
+) -> Scene:
+    """Parse scene text (see the module docstring for the format).
+
+    Examples
+    --------
+    >>> parse_scene('[camera]\\nfov = 400\\n', "s.toml")
+    Traceback (most recent call last):
+    ...
+    render.scene.SceneError: s.toml:2:1: camera: fov must be in (0, 180) degrees, got 400
+    """
+    base_dir = Path(".") if base_dir is None else Path(base_dir)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        msg = str(e)
+        m = re.search(r"\(at line (\d+), column (\d+)\)", msg)
+        line, col = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg)
+        raise SceneError(f"TOML syntax error: {msg}", path, line, col) from None
+    loc = _Locator(text)
+    return _Parser(data, loc, path, base_dir).scene(overrides or {})
+
+
+class _Parser:
+    def __init__(self, data: dict, loc: _Locator, path: str, base_dir: Path):
+        self.data, self.loc, self.path, self.base_dir = data, loc, path, base_dir
+
+    def error(self, msg: str, section: str, index: int | None = None, key: str | None = None):
+        line, col = (
+            self.loc.key(section, index, key) if key else (self.loc.section(section, index)[0], 1)
+        )
+        return SceneError(msg, self.path, line, col if line else 0)
+
+    def _check_keys(self, table: dict, allowed: set, section: str, index: int | None = None):
+        for k in table:
+            if k not in allowed:
+                import difflib
+
+                close = difflib.get_close_matches(k, sorted(allowed), n=1)
+                hint = (
+                    f" (did you mean {close[0]!r}?)"
+                    if close
+                    else f"; allowed: {', '.join(sorted(allowed))}"
+                )
+                where = section if index is None else f"{section}[{index}]"
+                raise self.error(f"{where}: unknown key {k!r}{hint}", section, index, k)
+
+    def _vec(self, table, key, section, index=None, default=None, size=3, what="numbers"):
+        if key not in table:
+            if default is None:
+                where = section if index is None else f"{section}[{index}]"
+                raise self.error(f"{where}: missing {key!r}", section, index)
+            return np.asarray(default, dtype=np.float64)
+        v = table[key]
+        ok = (
+            isinstance(v, list)
+            and len(v) == size
+            and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                for x in v
+            )
+        )
+        if not ok:
+            raise self.error(
+                f"{section}: {key} must be {size} {what}, got {v!r}", section, index, key
+            )
+        return np.asarray(v, dtype=np.float64)
+
+    def _num(self, table, key, section, index=None, default=None, positive=False):
+        if key not in table:
+            return default
+        v = table[key]
+        if (
+            not isinstance(v, (int, float))
+            or isinstance(v, bool)
+            or not math.isfinite(v)
+            or (positive and v <= 0)
+        ):
+            what = "a number > 0" if positive else "a number"
+            raise self.error(f"{section}: {key} must be {what}, got {v!r}", section, index, key)
+        return float(v)
+
+    def _color(self, table, key, section, index=None, default=None):
+        if key not in table:
+            return default
+        v = table[key]
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0:
+            return np.full(3, float(v))
+        c = self._vec(table, key, section, index, size=3, what="non-negative numbers [r, g, b]")
+        if np.any(c < 0):
+            raise self.error(
+                f"{section}: {key} must be non-negative, got {v!r}", section, index, key
+            )
+        return c
+
+    # ---------------------------------------------------------------- sections
+    def scene(self, overrides: dict) -> Scene:
+        top = {"camera", "render", "lights", "objects"}
+        self._check_keys(self.data, top, "scene")
+        settings = self.settings(self.data.get("render", {}), overrides)
+        camera = self.camera(self.data.get("camera", {}), settings)
+        objects = [self.object(o, i) for i, o in enumerate(self.data.get("objects", []))]
+        if not objects:
+            raise SceneError("the scene has no [[objects]]", self.path, 1, 0)
+        lights: list[Light] = []
+        for i, spec in enumerate(self.data.get("lights", [])):
+            light, obj = self.light(spec, i)
+            if light is not None and light.infinite and any(x.infinite for x in lights):
+                raise self.error(
+                    f"lights[{i}]: a scene has at most one environment", "lights", i, "type"
+                )
+            if light is not None:
+                lights.append(light)
+            if obj is not None:
+                objects.append(obj)
+        return Scene(camera, objects, lights, settings, self.path)
+
+    def settings(self, t: dict, overrides: dict) -> RenderSettings:
+        allowed = {
+            "resolution",
+            "spp",
+            "time",
+            "max_depth",
+            "rr_depth",
+            "seed",
+            "dicing_rate",
+            "dicing_tolerance",
+            "spp_per_pass",
+        }
+        self._check_keys(t, allowed, "render")
+        s = RenderSettings()
+        if "resolution" in t:
+            r = t["resolution"]
+            if not (
+                isinstance(r, list)
+                and len(r) == 2
+                and all(isinstance(x, int) and x >= 1 for x in r)
+            ):
+                raise self.error(
+                    f"render: resolution must be [width, height] in pixels, got {r!r}",
+                    "render",
+                    None,
+                    "resolution",
+                )
+            s.width, s.height = r
+        for key in (
+            "spp",
+            "max_depth",
+            "rr_depth",
+            "seed",
+            "spp_per_pass",
+            "time",
+            "dicing_rate",
+            "dicing_tolerance",
+        ):
+            if key in t:
+                setattr(s, key, t[key])
+        for key, value in overrides.items():
+            if value is not None:
+                setattr(s, key, value)
+        if "spp" in overrides and overrides["spp"] is not None and overrides.get("time") is None:
+            s.time = None
+        try:
+            s.validate()
+        except ValueError as e:
+            key = str(e).split()[0]
+            raise self.error(f"render: {e}", "render", None, key if key in t else None) from None
+        return s
+
+    def camera(self, t: dict, s: RenderSettings) -> Camera:
+        allowed = {"type", "position", "look_at", "up", "fov", "ortho_height"}
+        self._check_keys(t, allowed, "camera")
+        kind = t.get("type", "pinhole")
+        if kind not in ("pinhole", "orthographic"):
+            raise self.error(
+                f"camera: type must be 'pinhole' or 'orthographic', got {kind!r}",
+                "camera",
+                None,
+                "type",
+            )
+        pos = self._vec(t, "position", "camera", default=(0.0, 0.0, 3.0))
+        look = self._vec(t, "look_at", "camera", default=(0.0, 0.0, 0.0))
+        up = self._vec(t, "up", "camera", default=(0.0, 1.0, 0.0))
+        fov = self._num(t, "fov", "camera", default=40.0)
+        if not 0.0 < fov < 180.0:
+            raise self.error(
+                f"camera: fov must be in (0, 180) degrees, got {t['fov']!r}", "camera", None, "fov"
+            )
+        ortho = None
+        if kind == "orthographic":
+            ortho = self._num(t, "ortho_height", "camera", default=2.0, positive=True)
+        elif "ortho_height" in t:
+            raise self.error(
+                "camera: ortho_height needs type = 'orthographic'", "camera", None, "ortho_height"
+            )
+        try:
+            return Camera(
+                position=tuple(pos),
+                look_at=tuple(look),
+                up=tuple(up),
+                fov_y_deg=fov,
+                width=s.width,
+                height=s.height,
+                ortho_height=ortho,
+            )
+        except ValueError as e:
+            raise self.error(f"camera: {e}", "camera") from None
+
+    def transform(self, t: dict, section: str, i: int) -> np.ndarray:
+        tr = self._vec(t, "translate", section, i, default=(0.0, 0.0, 0.0))
+        rot = self._vec(t, "rotate", section, i, default=(0.0, 0.0, 0.0), what="degrees")
+        sc = t.get("scale", 1.0)
+        if isinstance(sc, list):
+            sc = self._vec(t, "scale", section, i)
+        elif not isinstance(sc, (int, float)) or isinstance(sc, bool):
+            raise self.error(
+                f"{section}[{i}]: scale must be a number or [x, y, z]", section, i, "scale"
+            )
+        try:
+            return make_transform(tr, rot, sc)
+        except ValueError as e:
+            raise self.error(f"{section}[{i}]: {e}", section, i, "scale") from None
+
+    def surface(self, spec, i: int):
+        from displacement import surfaces
+        from displacement.view import make_surface
+
+        if isinstance(spec, str):
+            try:
+                return make_surface(spec)
+            except ValueError as e:
+                raise self.error(f"objects[{i}]: {e}", "objects", i, "surface") from None
+        if isinstance(spec, dict):
+            params = dict(spec)
+            kind = params.pop("type", None)
+            if kind not in SURFACE_TYPES:
+                raise self.error(
+                    f"objects[{i}]: surface type must be one of {', '.join(SURFACE_TYPES)}, "
+                    f"got {kind!r}",
+                    "objects",
+                    i,
+                    "surface",
+                )
+            cls = getattr(surfaces, SURFACE_TYPES[kind])
+            try:
+                return cls(**params)
+            except (TypeError, ValueError) as e:
+                raise self.error(
+                    f"objects[{i}]: surface {kind!r}: {e}", "objects", i, "surface"
+                ) from None
+        raise self.error(
+            f"objects[{i}]: surface must be a name or a table, got {spec!r}",
+            "objects",
+            i,
+            "surface",
+        )
+
+    def mesh(self, rel: str, i: int):
+        import trimesh
+
+        from displacement.surfaces import MeshSurface
+
+        p = Path(rel)
+        if not p.is_absolute():
+            p = self.base_dir / p
+        try:
+            m = trimesh.load(p, force="mesh", process=False)
+        except Exception as e:  # trimesh raises many kinds
+            raise self.error(
+                f"objects[{i}]: cannot load mesh {str(p)!r}: {e}", "objects", i, "mesh"
+            ) from None
+        if len(m.faces) == 0:
+            raise self.error(
+                f"objects[{i}]: mesh {str(p)!r} has no triangles", "objects", i, "mesh"
+            )
+        uv = getattr(m.visual, "uv", None)
+        if uv is None or len(uv) != len(m.vertices):
+            # no texture coordinates in the file: uv = (0, 0) everywhere (frames from the
+            # surface's fallback); textures and uv-driven fields are then constant
+            m.visual = trimesh.visual.TextureVisuals(uv=np.zeros((len(m.vertices), 2)))
+        try:
+            return MeshSurface(m)
+        except ValueError as e:
+            raise self.error(f"objects[{i}]: mesh {str(p)!r}: {e}", "objects", i, "mesh") from None
+
+    def material(self, text, i: int, section: str = "objects"):
+        if not isinstance(text, str):
+            raise self.error(
+                f"{section}[{i}]: material must be an MDL call expression string, got {text!r}",
+                section,
+                i,
+                "material",
+            )
+        line, _ = self.loc.key(section, i, "material")
+        try:
+            return compile_material(text, base_dir=self.base_dir)
+        except SceneError:
+            raise
+        except Exception as e:
+            offset = getattr(e, "offset", None)
+            if isinstance(offset, int) and offset >= 0 and hasattr(e, "col"):
+                ln, c = self.loc.value_position(line, offset)
+            else:
+                ln, c = line, 0
+            msg = getattr(e, "message", None) or str(e)
+            fix = getattr(e, "fix", None)
+            if fix:
+                msg += f" ({fix})"
+            raise SceneError(f"{section}[{i}]: material: {msg}", self.path, ln, c) from None
+
+    def object(self, t: dict, i: int) -> SceneObject:
+        if not isinstance(t, dict):
+            raise self.error(f"objects[{i}] must be a table", "objects", i)
+        allowed = {
+            "name",
+            "surface",
+            "mesh",
+            "material",
+            "translate",
+            "rotate",
+            "scale",
+            "resolution",
+        }
+        self._check_keys(t, allowed, "objects", i)
+        if ("surface" in t) == ("mesh" in t):
+            raise self.error(
+                f"objects[{i}]: give exactly one of surface = NAME or mesh = PATH", "objects", i
+            )
+        surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
+        if "material" not in t:
+            raise self.error(
+                f"objects[{i}]: missing material (an MDL call expression)", "objects", i
+            )
+        material = self.material(t["material"], i)
+        res = t.get("resolution")
+        if res is not None and not (
+            isinstance(res, list)
+            and len(res) == 2
+            and all(isinstance(x, int) and x >= 1 for x in res)
+        ):
+            raise self.error(
+                f"objects[{i}]: resolution must be [nu, nv] cells", "objects", i, "resolution"
+            )
+        name = t.get("name", f"object{i}")
+        return SceneObject(
+            surface,
+            material,
+            self.transform(t, "objects", i),
+            str(name),
+            tuple(res) if res else None,
+            t["material"],
+        )
+
+    def light(self, t: dict, i: int):
+        kinds = {"point", "spot", "directional", "environment", "quad", "sphere"}
+        kind = t.get("type")
+        if kind not in kinds:
+            raise self.error(
+                f"lights[{i}]: type must be one of {', '.join(sorted(kinds))}, got {kind!r}",
+                "lights",
+                i,
+                "type",
+            )
+        sec = "lights"
+        common = {"type", "name"}
+        try:
+            if kind == "point":
+                self._check_keys(t, common | {"position", "intensity"}, sec, i)
+                return PointLight(
+                    self._vec(t, "position", sec, i),
+                    self._color(t, "intensity", sec, i, np.ones(3)),
+                ), None
+            if kind == "spot":
+                self._check_keys(
+                    t,
+                    common
+                    | {
+                        "position",
+                        "direction",
+                        "look_at",
+                        "intensity",
+                        "cutoff_angle",
+                        "beam_width",
+                    },
+                    sec,
+                    i,
+                )
+                pos = self._vec(t, "position", sec, i)
+                if "look_at" in t:
+                    direction = self._vec(t, "look_at", sec, i) - pos
+                else:
+                    direction = self._vec(t, "direction", sec, i, default=(0.0, -1.0, 0.0))
+                return SpotLight(
+                    pos,
+                    direction,
+                    self._color(t, "intensity", sec, i, np.ones(3)),
+                    self._num(t, "cutoff_angle", sec, i, 20.0),
+                    self._num(t, "beam_width", sec, i, None),
+                ), None
+            if kind == "directional":
+                self._check_keys(t, common | {"direction", "irradiance"}, sec, i)
+                return DirectionalLight(
+                    self._vec(t, "direction", sec, i),
+                    self._color(t, "irradiance", sec, i, np.ones(3)),
+                ), None
+            if kind == "environment":
+                self._check_keys(t, common | {"radiance", "file", "scale", "rotation"}, sec, i)
+                if "file" in t:
+                    from displacement.textures import read_texture
+
+                    p = Path(t["file"])
+                    p = p if p.is_absolute() else self.base_dir / p
+                    try:
+                        img = read_texture(p)
+                    except Exception as e:
+                        raise self.error(
+                            f"lights[{i}]: cannot read environment {str(p)!r}: {e}", sec, i, "file"
+                        ) from None
+                    img = getattr(img, "data", img)
+                    return LatLongEnvironment(
+                        np.asarray(img),
+                        self._num(t, "scale", sec, i, 1.0),
+                        self._num(t, "rotation", sec, i, 0.0),
+                    ), None
+                return ConstantEnvironment(self._color(t, "radiance", sec, i, np.ones(3))), None
+            # emissive geometry
+            self._check_keys(
+                t,
+                common | {"center", "normal", "size", "up", "radius", "radiance", "intensity"},
+                sec,
+                i,
+            )
+            if "radiance" in t and "intensity" in t:
+                raise self.error(
+                    f"lights[{i}]: give radiance or intensity, not both", sec, i, "intensity"
+                )
+            if "intensity" in t:
+                intensity = self._color(t, "intensity", sec, i)
+            else:
+                intensity = np.pi * self._color(t, "radiance", sec, i, np.ones(3))
+            center = self._vec(t, "center", sec, i)
+            name = t.get("name", f"{kind}_light{i}")
+            if kind == "quad":
+                from displacement.surfaces import Plane
+
+                nrm = self._vec(t, "normal", sec, i, default=(0.0, -1.0, 0.0))
+                size = t.get("size", 1.0)
+                size = (size, size) if isinstance(size, (int, float)) else size
+                size = self._vec({"size": list(size)}, "size", sec, i, size=2)
+                au, av, nrm = _plane_axes(nrm, self._vec(t, "up", sec, i, default=(0.0, 0.0, -1.0)))
+                origin = center - 0.5 * (size[0] * au + size[1] * av)
+                surface = Plane(
+                    size=tuple(size), origin=tuple(origin), axis_u=tuple(au), axis_v=tuple(av)
+                )
+            else:
+                from displacement.surfaces import UVSphere
+
+                surface = UVSphere(self._num(t, "radius", sec, i, 0.25, positive=True))
+            transform = make_transform(translate=center) if kind == "sphere" else np.eye(4)
+            return None, SceneObject(
+                surface,
+                emissive_material(intensity),
+                transform,
+                str(name),
+                (48, 24) if kind == "sphere" else None,
+                f"emissive(intensity: {intensity.tolist()})",
+            )
+        except SceneError:
+            raise
+        except ValueError as e:
+            raise self.error(f"lights[{i}]: {e}", sec, i) from None
+
+
+def _plane_axes(normal: np.ndarray, up: np.ndarray):
+    """Orthonormal (axis_u, axis_v, normal) with axis_u x axis_v = normal."""
+    n = normal / (np.linalg.norm(normal) or 1.0)
+    if np.linalg.norm(normal) == 0:
+        raise ValueError("quad light normal must not be zero")
+    au = np.cross(up, n)
+    if np.linalg.norm(au) < 1e-9:
+        au = np.cross([1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0], n)
+    au /= np.linalg.norm(au)
+    av = np.cross(n, au)
+    return au, av, n
+
+
+# ---------------------------------------------------------------------------- materials
+def compile_material(text: str, base_dir=None):
+    """An MDL call expression (a Handbook material with arguments) as a material.
+
+    Parsed by :func:`render.expr.parse_material` against :data:`render.materials.MATERIALS`;
+    textures are looked up relative to ``base_dir`` (the scene file's folder).
+    """
+    from render import expr
+
+    return expr.parse_material(text, base_dir=base_dir)
+
+
+def emissive_material(intensity) -> Any:
+    """A black, diffusely emitting material: MDL's
+    ``material(surface: material_surface(emission: material_emission(df::diffuse_edf(),
+    intensity)))``, the area light of a ``quad`` or ``sphere`` light."""
+    from render import material as m
+
+    return m.material(
+        surface=m.material_surface(
+            scattering=None,
+            emission=m.material_emission(
+                emission=m.df.diffuse_edf(), intensity=tuple(np.asarray(intensity, float))
+            ),
+        )
+    )

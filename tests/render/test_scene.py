@@ -1,0 +1,316 @@
+"""Scene files: parsing, located errors (file:line:col), transforms, geometry tables, and
+``pwc render`` end to end (EXR + PNG)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pwc.cli import main
+from render.film import read_exr
+from render.integrator import render
+from render.lights import ConstantEnvironment, PointLight, SpotLight
+from render.scene import Scene, SceneError, load_scene, make_transform, parse_scene
+
+STAGE = """\
+[camera]
+position = [0.0, 1.1, 3.6]
+look_at = [0.0, 0.45, 0.0]
+fov = 30.0
+
+[render]
+resolution = [32, 24]
+spp = 2
+seed = 5
+
+[[lights]]
+type = "quad"
+center = [-2.0, 3.0, 2.0]
+normal = [0.5, -0.7, -0.5]
+size = [1.0, 1.0]
+radiance = [5.0, 5.0, 5.0]
+
+[[lights]]
+type = "environment"
+radiance = 0.1
+
+[[objects]]
+name = "square"
+surface = "square"
+translate = [-1.1, 0.0, 0.0]
+material = "waves(distance: float2(0.02, 0.02), frequency: float2(10.0, 10.0), tint: color(0.6))"
+
+[[objects]]
+name = "sphere"
+surface = { type = "sphere", radius = 0.5 }
+translate = [0.6, 0.5, 0.0]
+material = '''glossy(tint: color(0.6, 0.4, 0.0))'''
+"""
+
+
+def test_parse_stage_scene():
+    scene = parse_scene(STAGE, "stage.toml")
+    assert scene.camera.width == 32 and scene.camera.height == 24
+    assert scene.settings.spp == 2 and scene.settings.seed == 5
+    names = [o.name for o in scene.objects]
+    assert names == ["square", "sphere", "quad_light0"]
+    assert [type(light).__name__ for light in scene.lights] == ["ConstantEnvironment"]
+    assert scene.objects[0].displacement is not None and scene.objects[1].displacement is None
+    # the quad light faces its normal: axis_u x axis_v = normalized normal
+    quad = scene.objects[2].surface
+    assert np.allclose(quad.normal, np.array([0.5, -0.7, -0.5]) / np.linalg.norm([0.5, -0.7, -0.5]))
+
+
+def test_only_displaced_objects_are_diced():
+    scene = parse_scene(STAGE, "stage.toml")
+    geo = scene.build()
+    assert [s["diced"] for s in geo.stats] == [True, False, False]
+    assert geo.triangle_count == len(geo.faces) == len(geo.face_object) == len(geo.face_normal)
+    assert np.allclose(np.linalg.norm(geo.normals, axis=1), 1.0)
+    assert np.allclose(np.linalg.norm(geo.face_normal, axis=1), 1.0)
+    # geometric normals agree with the shading normals' side
+    assert np.all(np.einsum("ij,ij->i", geo.face_normal, geo.normals[geo.faces].sum(axis=1)) > 0)
+
+
+def test_overrides_and_defaults():
+    scene = parse_scene(STAGE, "s.toml", overrides={"spp": 7, "seed": 1, "time": None})
+    assert scene.settings.spp == 7 and scene.settings.seed == 1
+    scene = parse_scene("[[objects]]\nsurface = 'square'\nmaterial = 'grid()'\n")
+    assert scene.camera.width == 256 and scene.settings.max_depth == 8 and scene.lights == []
+
+
+def test_lights_of_every_kind():
+    text = (
+        STAGE
+        + """
+[[lights]]
+type = "point"
+position = [0, 2, 0]
+intensity = [1, 2, 3]
+
+[[lights]]
+type = "spot"
+position = [0, 2, 0]
+look_at = [0, 0, 0]
+intensity = 4.0
+cutoff_angle = 30.0
+
+[[lights]]
+type = "directional"
+direction = [0, -1, 0]
+irradiance = 2.0
+
+[[lights]]
+type = "sphere"
+center = [0, 3, 0]
+radius = 0.2
+intensity = 3.0
+"""
+    )
+    with pytest.raises(SceneError, match="at most one environment"):
+        parse_scene(text + '\n[[lights]]\ntype = "environment"\n', "s.toml")
+    scene = parse_scene(text, "s.toml")
+    kinds = [type(light).__name__ for light in scene.lights]
+    assert kinds == ["ConstantEnvironment", "PointLight", "SpotLight", "DirectionalLight"]
+    assert isinstance(scene.lights[1], PointLight) and np.allclose(
+        scene.lights[1].intensity, [1, 2, 3]
+    )
+    assert isinstance(scene.lights[2], SpotLight) and np.allclose(
+        scene.lights[2].direction, [0, -1, 0]
+    )
+    assert isinstance(scene.lights[0], ConstantEnvironment)
+    assert scene.objects[-1].name == "sphere_light5"
+    film = render(scene, progress=False)
+    assert np.all(np.isfinite(film.rgb())) and film.rgb().max() > 0
+
+
+def _err(text: str) -> SceneError:
+    with pytest.raises(SceneError) as info:
+        parse_scene(text, "bad.toml")
+    return info.value
+
+
+def test_errors_name_file_line_and_column():
+    # a misspelt material parameter: the column inside the TOML line
+    e = _err(STAGE.replace("frequency: float2(10.0", "frequncy: float2(10.0"))
+    line = (
+        STAGE.splitlines().index(
+            next(ln for ln in STAGE.splitlines() if ln.startswith('material = "waves'))
+        )
+        + 1
+    )
+    col = STAGE.splitlines()[line - 1].index("frequency") + 1
+    assert (e.line, e.column) == (line, col)
+    assert str(e).startswith(
+        f"bad.toml:{line}:{col}: objects[0]: material: "
+    ) and "frequency" in str(e)
+    # inside a ''' literal string too
+    e = _err(STAGE.replace("glossy(tint", "glosy(tint"))
+    assert e.line == STAGE.count("\n", 0, STAGE.index("material = '''")) + 1
+    assert e.column == len("material = '''") + 1 and "glossy" in e.message
+    # TOML syntax
+    e = _err("[camera]\nfov = \n")
+    assert e.line == 2 and "TOML syntax error" in e.message
+    # unknown keys with a suggestion, at their line
+    e = _err("[camera]\nfov = 30\nlookat = [0, 0, 0]\n")
+    assert (e.line, e.column) == (3, 1) and "did you mean 'look_at'" in e.message
+    e = _err(STAGE.replace('surface = "square"', 'surface = "squar"'))
+    assert "unknown surface 'squar'" in e.message and e.line > 0
+    e = _err(STAGE.replace("radius = 0.5 }", "radius = -0.5 }"))
+    assert "radius" in e.message
+    e = _err(STAGE.replace('type = "quad"', 'type = "quadd"'))
+    assert (
+        "type must be one of" in e.message
+        and e.line == STAGE.splitlines().index('type = "quad"') + 1
+    )
+    e = _err(STAGE.replace("resolution = [32, 24]", "resolution = [32, 0]"))
+    assert "resolution" in e.message and e.line == 7
+    e = _err(STAGE.replace("spp = 2", "spp = 0"))
+    assert "spp must be a whole number >= 1" in e.message and e.line == 8
+    e = _err(STAGE.replace("fov = 30.0", "fov = 180.0"))
+    assert e.line == 4
+    e = _err("[camera]\nposition = [0, 0]\n")
+    assert "position must be 3 numbers" in e.message and e.line == 2
+    e = _err('[[objects]]\nsurface = "square"\n')
+    assert "missing material" in e.message and e.line == 1
+    e = _err('[[objects]]\nsurface = "square"\nmesh = "x.obj"\nmaterial = "grid()"\n')
+    assert "exactly one of" in e.message
+    e = _err('[[objects]]\nmesh = "does_not_exist.obj"\nmaterial = "grid()"\n')
+    assert "cannot load mesh" in e.message and e.line == 2
+    e = _err("[render]\nspp = 1\n")
+    assert "no [[objects]]" in e.message
+    e = _err('[[objects]]\nsurface = "square"\nmaterial = "grid()"\nscale = 0\n')
+    assert "scale must be non-zero" in e.message and e.line == 4
+    with pytest.raises(SceneError, match="cannot read the scene file"):
+        load_scene("/nonexistent/scene.toml")
+
+
+def test_make_transform_order_and_extremes():
+    m = make_transform(translate=(1, 2, 3), rotate=(90, 0, 0), scale=(2, 1, 1))
+    # scale first (x doubled), then x-rotation (y -> z), then translation
+    assert np.allclose(m @ [1, 0, 0, 1], [3, 2, 3, 1]) and np.allclose(
+        m @ [0, 1, 0, 1], [1, 2, 4, 1]
+    )
+    tiny = make_transform(scale=1e-9)
+    assert np.isclose(np.linalg.det(tiny[:3, :3]), 1e-27)
+    for bad in ({"translate": (0, 0)}, {"rotate": (np.nan, 0, 0)}, {"scale": (1, 0, 1)}):
+        with pytest.raises(ValueError):
+            make_transform(**bad)
+
+
+def test_environment_map_from_file(tmp_path):
+    from render.film import Film
+
+    sky = Film(8, 4)
+    sky.add(
+        np.arange(32),
+        np.where((np.arange(32) < 8)[:, None], 2.0, 0.0) * np.ones((32, 3)),
+        np.ones(32),
+    )
+    sky.write_exr(tmp_path / "sky.exr")
+    text = STAGE.replace("radiance = 0.1", 'file = "sky.exr"\nscale = 0.5\nrotation = 10.0')
+    (tmp_path / "s.toml").write_text(text)
+    scene = load_scene(tmp_path / "s.toml")
+    env = scene.lights[0]
+    assert type(env).__name__ == "LatLongEnvironment"
+    assert np.allclose(
+        env.eval(np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])), [[1.0] * 3, [0.0] * 3]
+    )
+    e = _err(STAGE.replace("radiance = 0.1", 'file = "missing.exr"'))
+    assert "cannot read environment" in e.message
+
+
+def test_mesh_object_from_file(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    box.export(tmp_path / "box.obj")
+    text = """
+[camera]
+position = [2, 2, 3]
+[render]
+resolution = [16, 16]
+spp = 1
+[[lights]]
+type = "environment"
+[[objects]]
+mesh = "box.obj"
+material = "diffuse(tint: color(0.5))"
+"""
+    (tmp_path / "s.toml").write_text(text)
+    scene = load_scene(tmp_path / "s.toml")
+    geo = scene.build()
+    assert geo.triangle_count == 12
+    film = render(scene, progress=False, aovs=["object_id"])
+    assert (film.aov("object_id") == 0).sum() > 20
+
+
+def test_pwc_render_end_to_end(tmp_path, capsys):
+    (tmp_path / "stage.toml").write_text(STAGE)
+    exr, png = tmp_path / "out.exr", tmp_path / "out.png"
+    status = main(
+        [
+            "render",
+            str(tmp_path / "stage.toml"),
+            "-o",
+            str(exr),
+            "--png",
+            str(png),
+            "--spp",
+            "2",
+            "--aov",
+            "albedo,normal,depth,uv,object_id",
+            "--seed",
+            "3",
+            "--quiet",
+        ]
+    )
+    assert status == 0
+    ch = read_exr(exr)
+    assert ch["RGBA"].shape == (24, 32, 4)
+    for name in ("albedo.R", "normal.X", "depth.Z", "uv.U", "object_id.id"):
+        assert ch[name].shape == (24, 32)
+    assert np.all(np.isfinite(ch["RGBA"])) and ch["RGBA"][..., 3].max() == 1.0
+    from PIL import Image
+
+    assert Image.open(png).size == (32, 24)
+    # the same seed gives the same image through the CLI
+    exr2 = tmp_path / "out2.exr"
+    assert (
+        main(
+            [
+                "render",
+                str(tmp_path / "stage.toml"),
+                "-o",
+                str(exr2),
+                "--spp",
+                "2",
+                "--seed",
+                "3",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    assert np.array_equal(read_exr(exr2)["RGBA"], ch["RGBA"])
+
+
+def test_pwc_render_errors_are_messages_not_tracebacks(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(STAGE.replace("glossy(tint", "glosy(tint"))
+    assert main(["render", str(bad), "-o", str(tmp_path / "x.exr"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"{bad}:") and "Traceback" not in err and "glossy" in err
+    assert main(["render", str(bad), "-o", str(tmp_path / "x.png")]) == 2
+    assert "must be an .exr" in capsys.readouterr().err
+    assert main(["render", str(bad), "-o", str(tmp_path / "x.exr"), "--aov", "colour"]) == 2
+    assert "unknown AOV 'colour'" in capsys.readouterr().err
+    assert main(["render", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.exr")]) == 1
+    assert "cannot read the scene file" in capsys.readouterr().err
+
+
+def test_python_api_render_from_path(tmp_path):
+    (tmp_path / "stage.toml").write_text(STAGE)
+    film = render(tmp_path / "stage.toml", spp=1, progress=False)
+    assert film.rgb().shape == (24, 32, 3) and film.stats["spp"] == 1
+    assert isinstance(load_scene(tmp_path / "stage.toml"), Scene)
