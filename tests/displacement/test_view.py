@@ -238,7 +238,8 @@ def top_camera(size=SIZE):
 
 class TestBuildScene:
     @pytest.fixture(scope="class")
-    def scene(self, slant):
+    @classmethod
+    def scene(cls, slant):
         return view.build_scene(slant, "square", "v", camera=top_camera())
 
     def test_keys(self, scene):
