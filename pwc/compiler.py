@@ -83,8 +83,7 @@ class _Builder:
         self.diags: list[Diagnostic] = []
 
     def diag(self, severity: str, p: PwPoint, msg: str, fix: str) -> None:
-        loc = p.loc
-        self.diags.append(Diagnostic(severity, msg, loc, fix))
+        self.diags.append(Diagnostic(severity, msg, p.loc, fix))
 
     def row(self, kind: PwType, p: PwPoint, a, b, arc=None) -> None:
         row = {"type": kind, "pt": (float(b[0]), float(b[1])), "from": a, "line": p.loc.line,
@@ -109,11 +108,7 @@ class _Builder:
 
     def build(self) -> None:
         pts, tree = self.pts, self.tree
-        first = tree.points[0]
-        self.rows.append({"type": PwType.SEGMENT, "pt": tuple(map(float, pts[0])),
-                          "from": tuple(pts[0]), "line": first.loc.line, "text": first.text,
-                          "center": (0.0, 0.0), "radius": 0.0, "start": 0.0, "end": 0.0,
-                          "length": 0.0})
+        self.row(PwType.SEGMENT, tree.points[0], pts[0], pts[0])  # the start: no piece
         same_tol = TOL.same_point_rel * self.extent
         for i in range(1, len(pts)):
             p = tree.points[i]
