@@ -1,6 +1,6 @@
 """The wavefront path tracer: batches of rays through Embree, shading vectorized per object.
 
-Algorithm (unidirectional path tracing, as Mitsuba 3's ``path`` integrator):
+Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` integrators):
 
 * primary rays through random points of each pixel (box filter);
 * per bounce, ONE Embree call for all live paths; hits are grouped by object and each
@@ -18,8 +18,33 @@ Algorithm (unidirectional path tracing, as Mitsuba 3's ``path`` integrator):
 * ray origins are offset along the geometric normal by ``RAY_EPS`` times the scene's
   size (plus float32 rounding of the coordinates), because Embree's tnear is 0.
 
-The path state keeps a per-lane ``medium`` index (-1 = outside every object) ready for
-homogeneous volumes, thin walls and layers, which come later.
+Interfaces, thin walls and volumes (``reference/mdl-distribution-functions.md`` §1.2,
+§1.3, §6; :mod:`render.volume`):
+
+* every path lane carries a :class:`~render.volume.MediumStack` of the closed,
+  non-thin-walled objects it is inside.  At a hit on object ``k`` the bound BSDF gets
+  ``ior_inside`` = the material's ``ior`` and ``ior_outside`` = the IOR of the
+  innermost *other* object the lane is in (1 in air), so an object inside a liquid
+  refracts against the liquid (Handbook §5.8); total internal reflection follows from
+  that pair (the dfs handle it).  A transmission through such an object pushes it
+  (entering from the front) or pops it (leaving from the back);
+* ``thin_walled`` materials never enter the stack: no volume, and their transmission
+  does not refract (the dfs are bound with ``thin_walled=True``); ``surface`` shades the
+  front and ``backface`` the back when it is not the default; emission only where MDL
+  allows it (front; back only through a thin-walled ``backface`` edf);
+* the medium of the innermost object (``material.volume``) attenuates every segment
+  and, where it scatters, a free-flight distance is sampled (spectral MIS); a
+  scattering event is a path vertex with next-event estimation through the phase
+  function (``anisotropic_vdf``) and a phase-sampled continuation;
+* index-matched and thin-walled ``specular_bsdf`` transmissions that keep the direction
+  are *null* events (as Mitsuba's ``null``/``thindielectric``): they add no vertex
+  (depth, MIS state and Russian roulette are untouched), and shadow rays pass through
+  them, weighted by the straight-through transmission and by the transmittance of
+  every medium on the way.  A refracting boundary blocks shadow rays (no next-event
+  estimation through it; paths find lights behind it by sampling);
+* only objects whose triangles close up (every edge shared by two faces, after
+  welding) enclose a medium; an open surface (a square) is an interface without an
+  inside.  The camera must be outside every closed object.
 
 Parallelism: the image's samples are cut into fixed chunks; each chunk has its own
 random stream (``SeedSequence([seed, pass, chunk])``), so the image does not depend on
@@ -35,11 +60,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from render.bsdf import Lobe
 from render.camera import primary_rays
+from render.df import albedo_estimate
 from render.film import Film
-from render.frame import Frame
+from render.frame import Frame, mirror_z
 from render.lights import INFINITE_DISTANCE, AreaLight, LightSet
-from render.numerics import dot, unitize
+from render.numerics import ONE_MINUS_EPS, dot, unitize
+from render.volume import MAX_NESTING, MediumStack, is_closed, medium_of
 
 __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
 
@@ -51,6 +79,9 @@ CHUNK = 1 << 16
 PASS_SAMPLES = 1 << 19
 #: a lane may pass through at most this many cutout surfaces per segment
 MAX_CUTOUT_CROSSINGS = 64
+#: a sampled transmission counts as straight through (a null event) when its direction
+#: differs from the incoming one by less than this (1 - cos)
+STRAIGHT_TOL = 1e-9
 
 
 def _fast_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -79,6 +110,104 @@ class _Shaded:
     normal_world: np.ndarray
     opacity: np.ndarray
     frame: Frame | None = None
+    ior: np.ndarray | None = None
+
+
+class _Paths:
+    """The state of the live path lanes (compacted every segment).
+
+    Attributes
+    ----------
+    ids : (n,) int64
+        Sample index of each lane (row of the chunk's output).
+    o, d : (n, 3) float64
+        Ray origin and unit direction of the next segment.
+    beta : (n, 3) float64
+        Throughput.
+    depth : (n,) int64
+        Depth of the vertex the ray will find (1 for camera rays).
+    prev_pdf : (n,) float64
+        Solid-angle pdf of the last scattering vertex's sampled direction (MIS).
+    prev_delta : (n,) bool
+        The last vertex was specular (or the camera): no MIS.
+    first : (n,) bool
+        No opaque surface seen yet (alpha and AOVs).
+    crossings : (n,) int64
+        Cutout and null crossings since the last vertex (capped).
+    seg : (n,) float64
+        Distance from the last scattering vertex to this segment's origin (cutout and
+        null crossings keep the direction, so the light pdf of an emitter hit is
+        measured from that vertex).
+    shift : (n,) float64
+        How far the offset origin lies ahead of the true surface point along ``d``
+        (media attenuate the true length ``t + shift``).
+    hero : (n,) int64
+        The path's hero channel for free-flight sampling (:mod:`render.volume`).
+    r : (n, 3) float64
+        Spectral-MIS ratios ``p_j / p_hero`` of the path's free-flight decisions;
+        contributions are divided by ``mean(r)`` (1 without media).
+    stack : MediumStack
+    """
+
+    FIELDS = ("ids", "o", "d", "beta", "depth", "prev_pdf", "prev_delta", "first",
+              "crossings", "seg", "shift", "hero", "r")
+
+    def __init__(self, **kw):
+        for name in self.FIELDS:
+            setattr(self, name, kw[name])
+        self.stack = kw["stack"]
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def take(self, index: np.ndarray) -> _Paths:
+        """The lanes ``index`` (a bool mask or indices), copied."""
+        kw = {name: getattr(self, name)[index] for name in self.FIELDS}
+        return _Paths(stack=self.stack.take(index), **kw)
+
+    @staticmethod
+    def concatenate(parts: list) -> _Paths:
+        """One set of lanes from several (in order)."""
+        if len(parts) == 1:
+            return parts[0]
+        kw = {name: np.concatenate([getattr(p, name) for p in parts]) for name in _Paths.FIELDS}
+        return _Paths(stack=MediumStack.concatenate([p.stack for p in parts]), **kw)
+
+
+def _straight_through_candidate(material, two_faced: bool) -> bool:
+    """Whether a material's surface(s) may pass light straight through without a vertex:
+    ``specular_bsdf`` with a transmitting mode (straight when index-matched or thin)."""
+    surfaces = [material.surface] + ([material.backface] if two_faced else [])
+    for surface in surfaces:
+        node = getattr(surface, "scattering", None)
+        if node is None or getattr(node, "name", None) != "specular_bsdf":
+            return False
+        mode = str(node.kwargs.get("mode", "scatter_reflect")).split("::")[-1]
+        if mode not in ("scatter_transmit", "scatter_reflect_transmit"):
+            return False
+    return True
+
+
+def _surface_is_closed(surface) -> bool:
+    """Whether an object's base surface encloses a volume (tested on a coarse base mesh:
+    displacement and adaptive dicing keep a closed surface closed, but their T-junctions
+    would fail a topological test of the diced triangles)."""
+    from displacement.dice import is_mesh_surface
+
+    if is_mesh_surface(surface):
+        mesh = surface.base_mesh()
+    else:
+        try:
+            mesh = surface.base_mesh(8, 6)
+        except TypeError:
+            mesh = surface.base_mesh()
+    return is_closed(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+
+
+def _may_enclose(material) -> bool:
+    """Non-thin-walled: a closed object of this material has an inside (a medium, which
+    may be a vacuum, with the material's IOR)."""
+    return not getattr(material, "thin_walled", False)
 
 
 class Integrator:
@@ -129,6 +258,26 @@ class Integrator:
             dtype=bool,
         )
         self.max_depth = self.settings.max_depth if self.settings.max_depth > 0 else 1 << 30
+        # interfaces and media: closed non-thin-walled objects enter the medium stack
+        n_obj = len(self.objects)
+        self.encloses = np.zeros(n_obj, dtype=bool)
+        for k, obj in enumerate(self.objects):
+            if _may_enclose(obj.material):
+                self.encloses[k] = _surface_is_closed(obj.surface)
+        self.media = []
+        self.medium_index = np.full(n_obj, -1, dtype=np.int64)
+        for k, obj in enumerate(self.objects):
+            medium = medium_of(obj.material) if self.encloses[k] else None
+            if medium is not None:
+                self.medium_index[k] = len(self.media)
+                self.media.append(medium)
+        #: medium-stack depth: no deeper than the number of closed objects
+        self.nesting = int(min(MAX_NESTING, int(self.encloses.sum())))
+        self.null_candidate = np.array(
+            [_straight_through_candidate(o.material, bool(self.two_faced[k]))
+             for k, o in enumerate(self.objects)],
+            dtype=bool,
+        )
         # objects whose transform has no rotation or scale: object frames are world frames
         self.rigid_identity = np.array([np.array_equal(o.linear, np.eye(3)) for o in self.objects])
         self.embree_time = 0.0
@@ -163,10 +312,19 @@ class Integrator:
         p, ns, tu, tv, uv = self._attributes(face, b1, b2)
         return p, ns, tu, uv, self._object_state(k, p, ns, tu, tv, uv)
 
-    def _shade(self, k: int, state, front: np.ndarray | None = None) -> _Shaded:
+    def _shade(
+        self, k: int, state, front: np.ndarray | None = None, ior_outside=None
+    ) -> _Shaded:
+        """Shade lanes of object ``k``; ``ior_outside`` (n,) is the IOR around them
+        (None or 1: air, as ``material.shade`` assumes)."""
         obj = self.objects[k]
         sh = obj.material.shade(state, front)
         n = len(state)
+        bsdf = getattr(sh, "bsdf", None)
+        if ior_outside is not None and bsdf is not None and np.any(ior_outside != 1.0):
+            bsdf = self._rebind(k, sh, front, np.asarray(ior_outside, dtype=np.float64))
+        shade_ior = getattr(sh, "ior", None)
+        ior = None if shade_ior is None else np.asarray(shade_ior, dtype=np.float64).mean(axis=1)
         nrm = getattr(sh, "normal", None)
         if nrm is None:
             normal_world = None
@@ -180,13 +338,34 @@ class Integrator:
             np.asarray(getattr(sh, "intensity", 0.0), dtype=np.float64), (n, 3)
         )
         return _Shaded(
-            getattr(sh, "bsdf", None),
+            bsdf,
             getattr(sh, "edf", None),
             intensity,
             str(getattr(sh, "mode", "intensity_radiant_exitance")),
             normal_world,
             op,
             getattr(sh, "frame", None),
+            ior,
+        )
+
+    def _rebind(self, k: int, sh, front, ior_outside: np.ndarray):
+        """The surface bsdf of object ``k`` bound again with the real outside IOR.
+
+        ``material.shade`` binds with ``ior_outside = 1`` (air); lanes inside another
+        object (a medium stack that is not empty) need that object's IOR instead.  Uses
+        the same surface choice as ``shade`` (``backface`` for back lanes of thin-walled
+        materials with one) and the shading state it returned.
+        """
+        mat = self.objects[k].material
+        back = front is not None and len(front) > 0 and not np.any(front)
+        surface = mat.backface if (self.two_faced[k] and back) else mat.surface
+        node = surface.scattering
+        ior_inside = sh.ior.mean(axis=1) if callable(mat.ior) else float(np.mean(mat.ior))
+        return node.bind(
+            sh.state,
+            ior_outside=ior_outside,
+            ior_inside=ior_inside,
+            thin_walled=bool(mat.thin_walled),
         )
 
     def _shade_sides(self, k: int, state, front: np.ndarray) -> np.ndarray:
@@ -199,8 +378,15 @@ class Integrator:
                 out[side] = self._shade(k, state.subset(side), front[side]).opacity
         return out
 
-    def _emitted(self, k: int, sh: _Shaded, frame: Frame, wo_world: np.ndarray) -> np.ndarray:
-        """Radiance (n, 3) emitted toward ``wo_world`` by object ``k`` (0 without an edf)."""
+    def _emitted(
+        self, k: int, sh: _Shaded, frame: Frame, wo_world: np.ndarray, front=None
+    ) -> np.ndarray:
+        """Radiance (n, 3) emitted toward ``wo_world`` by object ``k`` (0 without an edf).
+
+        Edfs emit toward their frame's ``+z``: on the back lanes (``front`` False) of a
+        thin-walled material with its own ``backface``, whose edf emits from the back,
+        the frame is turned over (``wo`` mirrored through the tangent plane).
+        """
         n = len(wo_world)
         if sh.edf is None:
             return np.zeros((n, 3))
@@ -208,7 +394,10 @@ class Integrator:
         if "power" in sh.mode:
             light = self.lights.area_by_object.get(k)
             intensity = intensity / (light.area if light is not None else 1.0)
-        return sh.edf.eval(frame.to_local(wo_world)) * intensity
+        wo = frame.to_local(wo_world)
+        if self.two_faced[k] and front is not None:
+            wo = mirror_z(wo, ~np.asarray(front))
+        return sh.edf.eval(wo) * intensity
 
     def _emission_fn(self, k: int):
         const = _constant_diffuse_emission(self.objects[k].material)
@@ -236,7 +425,7 @@ class Integrator:
                 sh = self._shade(k, sub, front[side])
                 nw = sh.normal_world if sh.normal_world is not None else ns[side]
                 out[side] = self._emitted(
-                    k, sh, Frame.from_normal_tangent(nw, tu[side]), wo_world[side]
+                    k, sh, Frame.from_normal_tangent(nw, tu[side]), wo_world[side], front[side]
                 )
             return out
 
@@ -254,6 +443,20 @@ class Integrator:
         """``p`` pushed off the surface along ``ng`` to the side ``toward`` points to."""
         side = np.where(dot(toward, ng) >= 0.0, 1.0, -1.0)
         return p + (side * self.eps)[:, None] * ng
+
+    def _mis_norm(self, r: np.ndarray):
+        """(n,) ``mean(r)`` of the spectral-MIS ratios of paths (1 in scenes without media)."""
+        return r.mean(axis=1) if self.media else 1.0
+
+    def _mis_norm_col(self, r: np.ndarray):
+        """:meth:`_mis_norm` as an (n, 1) column (or 1)."""
+        return r.mean(axis=1, keepdims=True) if self.media else 1.0
+
+    def _parallel_shift(self, ng: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """(n,) How much shorter a ray offset by :meth:`_offset` is than the same ray from
+        the surface point, through a medium bounded by a parallel surface:
+        ``eps / |cos|`` (``|cos|`` clamped at 0.1: grazing rays are ill-conditioned)."""
+        return self.eps / np.maximum(np.abs(dot(ng, d)), 0.1)
 
     def _intersect(self, o: np.ndarray, d: np.ndarray, tfar: np.ndarray | None = None) -> dict:
         t0 = _time.perf_counter()
@@ -325,6 +528,138 @@ class Integrator:
         occluded[live] = True  # still crossing cutouts after the cap: call it blocked
         return occluded
 
+    # ------------------------------------------------------------- media
+    def _medium_transmittance(self, top: np.ndarray, dist: np.ndarray) -> np.ndarray:
+        """(n, 3) transmittance of segments of length ``dist`` (n,) through the media of
+        objects ``top`` (n,) (-1 or an object without a medium: 1)."""
+        out = np.ones((len(top), 3))
+        if not self.media:
+            return out
+        med = np.where(top >= 0, self.medium_index[np.maximum(top, 0)], -1)
+        for j, medium in enumerate(self.media):
+            sel = np.flatnonzero(med == j)
+            if len(sel):
+                out[sel] = medium.transmittance(dist[sel])
+        return out
+
+    def _frame(self, k: int, sh: _Shaded, ns: np.ndarray, tu: np.ndarray) -> Frame:
+        nw = sh.normal_world if sh.normal_world is not None else ns
+        if self.rigid_identity[k] and sh.frame is not None:
+            return sh.frame
+        return Frame.from_normal_tangent(nw, tu)
+
+    def _shadow(self, o, d, dist, stack: MediumStack, rng, lead=None, tail=None) -> np.ndarray:
+        """Transmittance (n, 3) along shadow segments ``o + s d``, ``0 <= s < dist``.
+
+        Opaque surfaces give 0; cutouts pass stochastically; straight-through
+        (index-matched or thin-walled) ``specular_bsdf`` transmissions pass with their
+        transmission weight, entering and leaving media on the way (``stack``: the
+        media at the origins, not modified); every segment is attenuated by the medium
+        it runs through.  ``lead`` (n,) and ``tail`` (n,) are the lengths by which the
+        offset segment falls short of the true one at its start and end (media attenuate
+        the true length).
+        """
+        n = len(o)
+        if n == 0:
+            return np.zeros((0, 3))
+        dist = np.maximum(dist, 0.0)
+        lead = np.zeros(n) if lead is None else np.asarray(lead, dtype=np.float64).copy()
+        tail = np.zeros(n) if tail is None else np.asarray(tail, dtype=np.float64)
+        if not self.null_candidate.any():
+            # no surface lets a shadow ray through into another medium: the origin's
+            # medium is the only one on the segment
+            occ = self._occluded(o, d, dist, rng)
+            T = np.where(occ[:, None], 0.0, np.ones((n, 3)))
+            if self.media and np.any(stack.size):
+                T *= self._medium_transmittance(stack.top(), dist + lead + tail)
+            return T
+        T = np.ones((n, 3))
+        stack = stack.copy()
+        o = o.copy()
+        dist = dist.copy()
+        live = np.arange(n)
+        for _ in range(MAX_CUTOUT_CROSSINGS):
+            if len(live) == 0:
+                break
+            hit = self._intersect(o[live], d[live], dist[live])
+            prim = hit["primID"]
+            got = prim >= 0
+            t = np.where(got, hit["tfar"].astype(np.float64), dist[live])
+            if self.media:
+                length = t + lead[live] + np.where(got, 0.0, tail[live])
+                T[live] *= self._medium_transmittance(stack.top()[live], length)
+            live, t = live[got], t[got]
+            if len(live) == 0:
+                break
+            face = self.geo.face_offset[hit["geomID"][got]] + prim[got]
+            objs = self.geo.face_object[face]
+            b1 = hit["u"][got].astype(np.float64)
+            b2 = hit["v"][got].astype(np.float64)
+            ng = self.geo.face_normal[face]
+            dl = d[live]
+            front = dot(dl, ng) < 0
+            factor = np.zeros((len(live), 3))
+            crossing = np.zeros(len(live), dtype=bool)
+            cross_ior = np.ones(len(live))
+            u = rng.random(len(live))
+            for k in np.unique(objs):
+                if not (self.cutout[k] or self.null_candidate[k]):
+                    continue
+                sel = np.flatnonzero(objs == k)
+                _, ns, tu, _, state = self._state(k, face[sel], b1[sel], b2[sel])
+                sides = (
+                    (front[sel], ~front[sel]) if self.two_faced[k] else (np.ones(len(sel), bool),)
+                )
+                for side in sides:
+                    if not np.any(side):
+                        continue
+                    ss = sel[side]
+                    st = state if side.all() else state.subset(side)
+                    ior_out = stack.take(live[ss]).outside_ior(np.full(len(ss), k))
+                    sh = self._shade(k, st, front[ss], ior_outside=ior_out)
+                    cut = u[ss] >= sh.opacity if self.cutout[k] else np.zeros(len(ss), bool)
+                    f = np.zeros((len(ss), 3))
+                    if self.null_candidate[k] and sh.bsdf is not None:
+                        frame = self._frame(k, sh, ns[side], tu[side])
+                        wo = frame.to_local(-dl[ss])
+                        s = sh.bsdf.sample(
+                            wo, np.full(len(ss), ONE_MINUS_EPS), np.zeros((len(ss), 2))
+                        )
+                        straight = (s.lobe == int(Lobe.SPECULAR_TRANSMISSION)) & (
+                            dot(frame.to_world(s.wi), dl[ss]) > 1.0 - STRAIGHT_TOL
+                        )
+                        f = np.where(straight[:, None], s.pdf[:, None] * s.weight, 0.0)
+                        crossing[ss] = straight & ~cut
+                        if sh.ior is not None:
+                            cross_ior[ss] = sh.ior
+                    factor[ss] = np.where(cut[:, None], 1.0, f)
+            passes = np.any(factor > 0.0, axis=1)
+            T[live] *= factor
+            enc = crossing & self.encloses[objs]
+            if np.any(enc):
+                obj_full = np.full(n, -1, dtype=np.int64)
+                obj_full[live] = objs
+                ior_full = np.ones(n)
+                ior_full[live] = cross_ior
+                enter = np.zeros(n, dtype=bool)
+                leave = np.zeros(n, dtype=bool)
+                enter[live] = enc & front
+                leave[live] = enc & ~front
+                stack.push(enter, obj_full, ior_full)
+                stack.pop(leave, obj_full)
+            if not np.any(passes):
+                live = live[:0]
+                break
+            lp = live[passes]
+            p = self.geo.interpolate(face[passes], b1[passes], b2[passes])[0]
+            o[lp] = self._offset(p, ng[passes], d[lp])
+            cos = np.abs(dot(ng[passes], d[lp]))
+            dist[lp] = np.maximum(dist[lp] - t[passes] - self.eps * cos, 0.0)
+            lead[lp] = self._parallel_shift(ng[passes], d[lp])
+            live = lp
+        T[live] = 0.0  # still crossing surfaces after the cap: call it blocked
+        return T
+
     # --------------------------------------------------------------- one chunk
     def trace(self, pixel: np.ndarray, rng: np.random.Generator) -> tuple:
         """Trace one path per entry of ``pixel``.
@@ -341,11 +676,9 @@ class Integrator:
         aovs : dict of arrays
         """
         n = len(pixel)
-        geo = self.geo
         o, d = primary_rays(self.camera, pixel, rng.random((n, 2)))
         L = np.zeros((n, 3))
         alpha = np.zeros(n)
-        want = set(self.aovs)
         aov = {
             "albedo": np.zeros((n, 3)),
             "normal": np.zeros((n, 3)),
@@ -353,199 +686,365 @@ class Integrator:
             "uv": np.zeros((n, 2)),
             "object_id": np.full(n, -1, dtype=np.int32),
         }
-        # path state of the live lanes (compacted every segment)
-        ids = np.arange(n)
-        beta = np.ones((n, 3))
-        depth = np.ones(n, dtype=np.int64)  # depth of the vertex the ray will find
-        prev_pdf = np.zeros(n)
-        prev_delta = np.ones(n, dtype=bool)  # camera rays count as specular (no MIS)
-        first = np.ones(n, dtype=bool)  # no opaque surface seen yet
-        crossings = np.zeros(n, dtype=np.int64)
-        medium = np.full(n, -1, dtype=np.int32)  # for volumes (later): -1 = outside
+        paths = _Paths(
+            ids=np.arange(n),
+            o=o,
+            d=d,
+            beta=np.ones((n, 3)),
+            depth=np.ones(n, dtype=np.int64),
+            prev_pdf=np.zeros(n),
+            prev_delta=np.ones(n, dtype=bool),  # camera rays count as specular (no MIS)
+            first=np.ones(n, dtype=bool),
+            crossings=np.zeros(n, dtype=np.int64),
+            seg=np.zeros(n),
+            shift=np.zeros(n),
+            # one hero channel per path, drawn only in scenes with media
+            hero=(
+                np.minimum((rng.random(n) * 3).astype(np.int64), 2)
+                if self.media
+                else np.zeros(n, dtype=np.int64)
+            ),
+            r=np.ones((n, 3)),
+            stack=MediumStack(n, self.nesting),
+        )
         env = self.lights.environment
-        cam_fwd = self.camera.forward
 
-        while len(ids):
-            hit = self._intersect(o, d)
+        while len(paths):
+            hit = self._intersect(paths.o, paths.d)
             prim = hit["primID"]
             miss = prim < 0
-            if np.any(miss):
-                if env is not None:
-                    dm = d[miss]
-                    le = env.eval(dm)
-                    w = np.where(
-                        prev_delta[miss],
-                        1.0,
-                        _power(prev_pdf[miss], env.pdf(dm) * self.lights.select_pdf),
+            t_hit = np.where(miss, np.inf, hit["tfar"].astype(np.float64))
+            # the medium of each lane attenuates the segment or scatters inside it
+            scat, t_event = self._sample_media(paths, t_hit, rng)
+            escaped = miss & ~scat
+            if env is not None and np.any(escaped):
+                dm = paths.d[escaped]
+                le = env.eval(dm)
+                w = np.where(
+                    paths.prev_delta[escaped],
+                    1.0,
+                    _power(paths.prev_pdf[escaped], env.pdf(dm) * self.lights.select_pdf),
+                )
+                L[paths.ids[escaped]] += (
+                    paths.beta[escaped] * le * (w / self._mis_norm(paths.r[escaped]))[:, None]
+                )
+            nxt = []
+            surf = ~miss & ~scat
+            if np.any(surf):
+                nxt.append(
+                    self._surface_events(
+                        paths if surf.all() else paths.take(surf),
+                        self.geo.face_offset[hit["geomID"][surf]] + prim[surf],
+                        hit["u"][surf].astype(np.float64),
+                        hit["v"][surf].astype(np.float64),
+                        t_hit[surf],
+                        L,
+                        alpha,
+                        aov,
+                        rng,
                     )
-                    L[ids[miss]] += beta[miss] * le * w[:, None]
-            keep = ~miss
-            if not np.any(keep):
+                )
+            if np.any(scat):
+                nxt.append(self._medium_events(paths.take(scat), t_event[scat], L, rng))
+            nxt = [p for p in nxt if len(p)]
+            if not nxt:
                 break
-            (ids, o, d, beta, depth, prev_pdf, prev_delta, first, crossings, medium) = (
-                a[keep]
-                for a in (ids, o, d, beta, depth, prev_pdf, prev_delta, first, crossings, medium)
-            )
-            m = len(ids)
-            face = geo.face_offset[hit["geomID"][keep]] + prim[keep]
-            b1 = hit["u"][keep].astype(np.float64)
-            b2 = hit["v"][keep].astype(np.float64)
-            t = hit["tfar"][keep].astype(np.float64)
-            objs = geo.face_object[face]
-            ng = geo.face_normal[face]
-            wo_world = -d
-
-            # per-lane results of the shading groups
-            passes = np.zeros(m, dtype=bool)
-            u_cut = rng.random(m)
-            u_light = rng.random((m, 3))
-            u_bsdf = rng.random((m, 3))
-            u_rr = rng.random(m)
-            new_d = np.zeros((m, 3))
-            new_w = np.zeros((m, 3))
-            new_pdf = np.zeros(m)
-            new_delta = np.zeros(m, dtype=bool)
-            scatter = np.zeros(m, dtype=bool)
-            nee_c = np.zeros((m, 3))
-            nee_ok = np.zeros(m, dtype=bool)
-            can_continue = depth < self.max_depth
-
-            # light samples for every lane (one light each)
-            front_all = dot(wo_world, ng) > 0
-            groups = []
-            for k in np.unique(objs):
-                sel = np.flatnonzero(objs == k)
-                if self.two_faced[k]:
-                    groups += [
-                        (k, g) for g in (sel[front_all[sel]], sel[~front_all[sel]]) if len(g)
-                    ]
-                else:
-                    groups.append((k, sel))
-            p_all, ns_all, tu_all, tv_all, uv_all = self._attributes(face, b1, b2)
-            lw, ldist, lli, lpdf, ldelta = self.lights.sample_li(
-                p_all, u_light[:, 0], u_light[:, 1:]
-            )
-
-            for k, sel in groups:
-                whole = len(groups) == 1
-                p, ns, tu, uv = (
-                    (p_all, ns_all, tu_all, uv_all)
-                    if whole
-                    else (p_all[sel], ns_all[sel], tu_all[sel], uv_all[sel])
-                )
-                state = self._object_state(k, p, ns, tu, tv_all if whole else tv_all[sel], uv)
-                sh = self._shade(k, state, front_all[sel])
-                if self.cutout[k]:
-                    ps = u_cut[sel] >= sh.opacity
-                    passes[sel] = ps & (crossings[sel] < MAX_CUTOUT_CROSSINGS)
-                opaque = ~passes[sel]
-                nw = sh.normal_world if sh.normal_world is not None else ns
-                frame = (
-                    sh.frame
-                    if (self.rigid_identity[k] and sh.frame is not None)
-                    else Frame.from_normal_tangent(nw, tu)
-                )
-                wo = frame.to_local(wo_world[sel])
-                g_wo = dot(wo_world[sel], ng[sel])
-                # emission, weighted against light sampling
-                if sh.edf is not None:
-                    le = self._emitted(k, sh, frame, wo_world[sel])
-                    cos_l = np.abs(g_wo)
-                    pl = np.where(
-                        cos_l > 0,
-                        self.area_pdf[k] * t[sel] ** 2 / np.where(cos_l > 0, cos_l, 1.0),
-                        0.0,
-                    )
-                    w = np.where(prev_delta[sel], 1.0, _power(prev_pdf[sel], pl))
-                    L[ids[sel]] += np.where(opaque[:, None], beta[sel] * le * w[:, None], 0.0)
-                # first opaque hit: alpha and AOVs
-                fo = first[sel] & opaque
-                if np.any(fo):
-                    lanes = ids[sel][fo]
-                    alpha[lanes] = 1.0
-                    if want:
-                        if "albedo" in want and sh.bsdf is not None:
-                            aov["albedo"][lanes] = sh.bsdf.albedo(wo[fo])
-                        aov["normal"][lanes] = nw[fo]
-                        aov["depth"][lanes] = dot(
-                            p[fo] - np.asarray(self.camera.position, dtype=np.float64),
-                            np.broadcast_to(cam_fwd, (int(fo.sum()), 3)),
-                        )
-                        aov["uv"][lanes] = uv[fo]
-                        aov["object_id"][lanes] = k
-                bsdf = sh.bsdf
-                live = opaque & can_continue[sel]
-                if bsdf is None or not np.any(live):
-                    continue
-                # next-event estimation
-                wl = frame.to_local(lw[sel])
-                f, pb = bsdf.eval_pdf(wo, wl)
-                g_wi = dot(lw[sel], ng[sel])
-                consistent = (g_wi * g_wo > 0) == (wl[:, 2] * wo[:, 2] > 0)
-                w = np.where(ldelta[sel], 1.0, _power(lpdf[sel], pb))
-                ok = live & (lpdf[sel] > 0) & consistent & (g_wi != 0)
-                contrib = beta[sel] * f * lli[sel] * (w / np.where(ok, lpdf[sel], 1.0))[:, None]
-                ok &= np.any(contrib > 0, axis=1)
-                nee_c[sel] = np.where(ok[:, None], contrib, 0.0)
-                nee_ok[sel] = ok
-                # continue the path with the BSDF's sample
-                s = bsdf.sample(wo, u_bsdf[sel, 0], u_bsdf[sel, 1:])
-                wi_world = frame.to_world(s.wi)
-                g_new = dot(wi_world, ng[sel])
-                consistent = (g_new * g_wo > 0) == (s.wi[:, 2] * wo[:, 2] > 0)
-                sc = live & s.valid & consistent & (g_new != 0) & np.any(s.weight > 0, axis=1)
-                scatter[sel] = sc
-                new_d[sel] = wi_world
-                new_w[sel] = s.weight
-                new_pdf[sel] = s.pdf
-                new_delta[sel] = s.is_delta
-
-            # shadow rays
-            if np.any(nee_ok):
-                q = np.flatnonzero(nee_ok)
-                org = self._offset(p_all[q], ng[q], lw[q])
-                # aim from the offset origin at the light point itself (lights at a
-                # finite distance), and stop short of it
-                finite = ldist[q] < INFINITE_DISTANCE
-                target = p_all[q] + lw[q] * np.where(finite, ldist[q], 0.0)[:, None]
-                sd, sok = unitize(target - org)
-                sdir = np.where((finite & sok)[:, None], sd, lw[q])
-                sdist = np.where(finite, np.linalg.norm(target - org, axis=1), ldist[q])
-                far = sdist * (1.0 - 1e-6) - self.eps
-                occ = self._occluded(org, sdir, far, rng)
-                vis = q[~occ]
-                L[ids[vis]] += nee_c[vis]
-
-            # lanes that pass through a cutout keep going straight on
-            first &= passes
-            crossings = np.where(passes, crossings + 1, 0)
-            beta = np.where(scatter[:, None], beta * new_w, beta)
-            # Russian roulette
-            rr = scatter & (depth >= self.settings.rr_depth)
-            qrr = np.minimum(beta.max(axis=1), 0.95)
-            survive = ~rr | (u_rr < qrr)
-            beta = np.where(
-                (rr & survive)[:, None],
-                beta / np.where(rr, np.maximum(qrr, 1e-300), 1.0)[:, None],
-                beta,
-            )
-            go = passes | (scatter & survive)
-            nd = np.where(passes[:, None], d, new_d)
-            o = self._offset(p_all, ng, nd)[go]
-            d = nd[go]
-            prev_pdf = np.where(passes, prev_pdf, new_pdf)[go]
-            prev_delta = np.where(passes, prev_delta, new_delta)[go]
-            depth = np.where(passes, depth, depth + 1)[go]
-            ids, beta, first, crossings, medium = (
-                ids[go],
-                beta[go],
-                first[go],
-                crossings[go],
-                medium[go],
-            )
+            paths = _Paths.concatenate(nxt)
 
         aovs = {a: aov[a] for a in self.aovs}
         return L, alpha, aovs
+
+    def _sample_media(self, paths: _Paths, t_hit: np.ndarray, rng):
+        """Free-flight sampling in each lane's medium (throughput updated in place).
+
+        Returns
+        -------
+        scattered : (n,) bool
+            A scattering event lies before the surface.
+        t : (n,) float64
+            Its distance (the surface's where there is none).
+        """
+        m = len(paths)
+        scattered = np.zeros(m, dtype=bool)
+        t = t_hit.copy()
+        if not self.media or not np.any(paths.stack.size):
+            return scattered, t
+        u = rng.random(m)
+        top = paths.stack.top()
+        med = np.where(top >= 0, self.medium_index[np.maximum(top, 0)], -1)
+        for j, medium in enumerate(self.media):
+            sel = np.flatnonzero(med == j)
+            if len(sel) == 0:
+                continue
+            shift = paths.shift[sel]
+            ds = medium.sample_distance(t_hit[sel] + shift, paths.hero[sel], u[sel])
+            w, ratio = ds.weight(paths.hero[sel])
+            paths.beta[sel] *= w
+            paths.r[sel] *= ratio
+            scattered[sel] = ds.scattered
+            t[sel] = np.where(ds.scattered, ds.t - shift, t_hit[sel])
+        return scattered, t
+
+    def _medium_events(self, P: _Paths, t: np.ndarray, L: np.ndarray, rng) -> _Paths:
+        """Scattering events inside media: next-event estimation through the phase
+        function and a phase-sampled continuation (a path vertex each)."""
+        m = len(P)
+        p = P.o + t[:, None] * P.d
+        wo = -P.d
+        u_light = rng.random((m, 3))
+        u_phase = rng.random((m, 3))
+        u_rr = rng.random(m)
+        live = P.depth < self.max_depth
+        top = P.stack.top()
+        med = self.medium_index[np.maximum(top, 0)]
+        lw, ldist, lli, lpdf, ldelta = self.lights.sample_li(p, u_light[:, 0], u_light[:, 1:])
+        new_d = np.zeros((m, 3))
+        new_pdf = np.zeros(m)
+        new_w = np.zeros((m, 3))
+        ok_s = np.zeros(m, dtype=bool)
+        nee_c = np.zeros((m, 3))
+        for j, medium in enumerate(self.media):
+            sel = np.flatnonzero((med == j) & live)
+            if len(sel) == 0:
+                continue
+            f, pp = medium.phase.eval_pdf(wo[sel], lw[sel])
+            w = np.where(ldelta[sel], 1.0, _power(lpdf[sel], pp))
+            ok = lpdf[sel] > 0
+            nee_c[sel] = np.where(
+                ok[:, None],
+                P.beta[sel]
+                * f
+                * lli[sel]
+                * (w / np.where(ok, lpdf[sel], 1.0) / self._mis_norm(P.r[sel]))[:, None],
+                0.0,
+            )
+            s = medium.phase.sample(wo[sel], u_phase[sel, 0], u_phase[sel, 1:])
+            new_d[sel] = s.wi
+            new_pdf[sel] = s.pdf
+            new_w[sel] = s.weight
+            ok_s[sel] = s.valid
+        q = np.flatnonzero(np.any(nee_c > 0, axis=1))
+        if len(q):
+            finite = ldist[q] < INFINITE_DISTANCE
+            far = np.where(finite, ldist[q] * (1.0 - 1e-6) - self.eps, ldist[q])
+            T = self._shadow(p[q], lw[q], far, P.stack.take(q), rng, tail=ldist[q] - far)
+            L[P.ids[q]] += nee_c[q] * T
+        beta = P.beta * new_w
+        rr = P.depth >= self.settings.rr_depth
+        qrr = np.minimum((beta / self._mis_norm_col(P.r)).max(axis=1), 0.95)
+        survive = ~rr | (u_rr < qrr)
+        scale = np.where(rr, np.maximum(qrr, 1e-300), 1.0)
+        beta = np.where(rr[:, None], beta / scale[:, None], beta)
+        go = live & ok_s & survive & np.any(beta > 0, axis=1)
+        out = P.take(go)
+        out.o = p[go]
+        out.d = new_d[go]
+        out.beta = beta[go]
+        out.depth = P.depth[go] + 1
+        out.prev_pdf = new_pdf[go]
+        out.prev_delta = np.zeros(int(go.sum()), dtype=bool)
+        out.crossings = np.zeros(int(go.sum()), dtype=np.int64)
+        out.seg = np.zeros(int(go.sum()))
+        out.shift = np.zeros(int(go.sum()))
+        return out
+
+    def _surface_events(self, P: _Paths, face, b1, b2, t, L, alpha, aov, rng) -> _Paths:
+        """Surface hits: emission (MIS), alpha and AOVs, next-event estimation, the
+        BSDF-sampled continuation (or a cutout / null crossing), Russian roulette."""
+        geo = self.geo
+        m = len(P)
+        ids, beta, depth = P.ids, P.beta, P.depth
+        objs = geo.face_object[face]
+        ng = geo.face_normal[face]
+        wo_world = -P.d
+        want = set(self.aovs)
+        cam_fwd = self.camera.forward
+
+        # per-lane results of the shading groups
+        passes = np.zeros(m, dtype=bool)
+        u_cut = rng.random(m)
+        u_light = rng.random((m, 3))
+        u_bsdf = rng.random((m, 3))
+        u_rr = rng.random(m)
+        new_d = np.zeros((m, 3))
+        new_w = np.zeros((m, 3))
+        new_pdf = np.zeros(m)
+        new_delta = np.zeros(m, dtype=bool)
+        scatter = np.zeros(m, dtype=bool)
+        null_pass = np.zeros(m, dtype=bool)
+        entry_ior = np.ones(m)
+        nee_c = np.zeros((m, 3))
+        nee_ok = np.zeros(m, dtype=bool)
+        can_continue = depth < self.max_depth
+        # distance from the last scattering vertex (emitter pdfs are measured from it)
+        dist_v = P.seg + t
+
+        # light samples for every lane (one light each)
+        front_all = dot(wo_world, ng) > 0
+        groups = []
+        for k in np.unique(objs):
+            sel = np.flatnonzero(objs == k)
+            if self.two_faced[k]:
+                groups += [(k, g) for g in (sel[front_all[sel]], sel[~front_all[sel]]) if len(g)]
+            else:
+                groups.append((k, sel))
+        p_all, ns_all, tu_all, tv_all, uv_all = self._attributes(face, b1, b2)
+        lw, ldist, lli, lpdf, ldelta = self.lights.sample_li(p_all, u_light[:, 0], u_light[:, 1:])
+        # the IOR around each hit object (air unless the lane is inside other objects)
+        ior_out_all = P.stack.outside_ior(objs) if np.any(P.stack.size) else None
+
+        for k, sel in groups:
+            whole = len(groups) == 1
+            p, ns, tu, uv = (
+                (p_all, ns_all, tu_all, uv_all)
+                if whole
+                else (p_all[sel], ns_all[sel], tu_all[sel], uv_all[sel])
+            )
+            state = self._object_state(k, p, ns, tu, tv_all if whole else tv_all[sel], uv)
+            sh = self._shade(
+                k, state, front_all[sel], None if ior_out_all is None else ior_out_all[sel]
+            )
+            if self.cutout[k]:
+                ps = u_cut[sel] >= sh.opacity
+                passes[sel] = ps & (P.crossings[sel] < MAX_CUTOUT_CROSSINGS)
+            opaque = ~passes[sel]
+            nw = sh.normal_world if sh.normal_world is not None else ns
+            frame = self._frame(k, sh, ns, tu)
+            wo = frame.to_local(wo_world[sel])
+            g_wo = dot(wo_world[sel], ng[sel])
+            if sh.ior is not None:
+                entry_ior[sel] = sh.ior
+            # emission, weighted against light sampling
+            if sh.edf is not None:
+                le = self._emitted(k, sh, frame, wo_world[sel], front_all[sel])
+                cos_l = np.abs(g_wo)
+                pl = np.where(
+                    cos_l > 0,
+                    self.area_pdf[k] * dist_v[sel] ** 2 / np.where(cos_l > 0, cos_l, 1.0),
+                    0.0,
+                )
+                w = np.where(P.prev_delta[sel], 1.0, _power(P.prev_pdf[sel], pl))
+                w = w / self._mis_norm(P.r[sel])
+                L[ids[sel]] += np.where(opaque[:, None], beta[sel] * le * w[:, None], 0.0)
+            # first opaque hit: alpha and AOVs
+            fo = P.first[sel] & opaque
+            if np.any(fo):
+                lanes = ids[sel][fo]
+                alpha[lanes] = 1.0
+                if want:
+                    if "albedo" in want and sh.bsdf is not None:
+                        aov["albedo"][lanes] = albedo_estimate(sh.bsdf, wo[fo])
+                    aov["normal"][lanes] = nw[fo]
+                    aov["depth"][lanes] = dot(
+                        p[fo] - np.asarray(self.camera.position, dtype=np.float64),
+                        np.broadcast_to(cam_fwd, (int(fo.sum()), 3)),
+                    )
+                    aov["uv"][lanes] = uv[fo]
+                    aov["object_id"][lanes] = k
+            bsdf = sh.bsdf
+            live = opaque & can_continue[sel]
+            # a null crossing adds no vertex: it is allowed at the maximum depth too
+            trial = opaque if self.null_candidate[k] else live
+            if bsdf is None or not np.any(trial):
+                continue
+            # next-event estimation
+            wl = frame.to_local(lw[sel])
+            f, pb = bsdf.eval_pdf(wo, wl)
+            g_wi = dot(lw[sel], ng[sel])
+            consistent = (g_wi * g_wo > 0) == (wl[:, 2] * wo[:, 2] > 0)
+            w = np.where(ldelta[sel], 1.0, _power(lpdf[sel], pb)) / self._mis_norm(P.r[sel])
+            ok = live & (lpdf[sel] > 0) & consistent & (g_wi != 0)
+            contrib = beta[sel] * f * lli[sel] * (w / np.where(ok, lpdf[sel], 1.0))[:, None]
+            ok &= np.any(contrib > 0, axis=1)
+            nee_c[sel] = np.where(ok[:, None], contrib, 0.0)
+            nee_ok[sel] = ok
+            # continue the path with the BSDF's sample
+            s = bsdf.sample(wo, u_bsdf[sel, 0], u_bsdf[sel, 1:])
+            wi_world = frame.to_world(s.wi)
+            g_new = dot(wi_world, ng[sel])
+            consistent = (g_new * g_wo > 0) == (s.wi[:, 2] * wo[:, 2] > 0)
+            sc = trial & s.valid & consistent & (g_new != 0) & np.any(s.weight > 0, axis=1)
+            new_d[sel] = wi_world
+            new_w[sel] = s.weight
+            new_pdf[sel] = s.pdf
+            new_delta[sel] = s.is_delta
+            if self.null_candidate[k]:
+                # a transmission that keeps the direction: no vertex (Mitsuba's null)
+                straight = (s.lobe == int(Lobe.SPECULAR_TRANSMISSION)) & (
+                    dot(wi_world, P.d[sel]) > 1.0 - STRAIGHT_TOL
+                )
+                null_pass[sel] = sc & straight & (P.crossings[sel] < MAX_CUTOUT_CROSSINGS)
+                sc &= can_continue[sel] | null_pass[sel]
+            scatter[sel] = sc
+
+        # shadow rays
+        if np.any(nee_ok):
+            q = np.flatnonzero(nee_ok)
+            org = self._offset(p_all[q], ng[q], lw[q])
+            # aim from the offset origin at the light point itself (lights at a
+            # finite distance), and stop short of it
+            finite = ldist[q] < INFINITE_DISTANCE
+            target = p_all[q] + lw[q] * np.where(finite, ldist[q], 0.0)[:, None]
+            sd, sok = unitize(target - org)
+            sdir = np.where((finite & sok)[:, None], sd, lw[q])
+            sdist = np.where(finite, np.linalg.norm(target - org, axis=1), ldist[q])
+            far = sdist * (1.0 - 1e-6) - self.eps
+            stack = P.stack.take(q)
+            # a shadow ray on the transmitted side starts inside (or outside) the object
+            cross = (dot(lw[q], ng[q]) * dot(wo_world[q], ng[q]) < 0) & self.encloses[objs[q]]
+            if np.any(cross):
+                stack.push(cross & front_all[q], objs[q], entry_ior[q])
+                stack.pop(cross & ~front_all[q], objs[q])
+            # the true segment starts at the surface point: for a light at a finite
+            # distance the aim was moved to the offset origin, for one at infinity the
+            # ray was shifted parallel to itself
+            lead = np.where(
+                finite,
+                np.linalg.norm(target - p_all[q], axis=1) - sdist,
+                self._parallel_shift(ng[q], sdir),
+            )
+            T = self._shadow(org, sdir, far, stack, rng, lead=lead, tail=sdist - far)
+            L[ids[q]] += nee_c[q] * T
+
+        # lanes that pass through a cutout keep going straight on
+        first = P.first & passes
+        straight = passes | null_pass
+        crossings = np.where(straight, P.crossings + 1, 0)
+        beta = np.where(scatter[:, None], beta * new_w, beta)
+        # Russian roulette (at real vertices only)
+        rr = scatter & ~null_pass & (depth >= self.settings.rr_depth)
+        qrr = np.minimum((beta / self._mis_norm_col(P.r)).max(axis=1), 0.95)
+        survive = ~rr | (u_rr < qrr)
+        beta = np.where(
+            (rr & survive)[:, None],
+            beta / np.where(rr, np.maximum(qrr, 1e-300), 1.0)[:, None],
+            beta,
+        )
+        go = passes | (scatter & survive)
+        nd = np.where(straight[:, None], P.d, new_d)
+        # transmissions through closed objects enter or leave their media
+        if np.any(self.encloses[objs]):
+            cross = scatter & (dot(nd, ng) * dot(wo_world, ng) < 0) & self.encloses[objs]
+            if np.any(cross):
+                P.stack.push(cross & front_all, objs, entry_ior)
+                P.stack.pop(cross & ~front_all, objs)
+        out = _Paths(
+            ids=ids[go],
+            o=self._offset(p_all, ng, nd)[go],
+            d=nd[go],
+            beta=beta[go],
+            depth=np.where(straight, depth, depth + 1)[go],
+            prev_pdf=np.where(straight, P.prev_pdf, new_pdf)[go],
+            prev_delta=np.where(straight, P.prev_delta, new_delta)[go],
+            first=first[go],
+            crossings=crossings[go],
+            seg=np.where(straight, dist_v, 0.0)[go],
+            shift=self._parallel_shift(ng, nd)[go],
+            hero=P.hero[go],
+            r=P.r[go],
+            stack=P.stack.take(go),
+        )
+        return out
 
     # -------------------------------------------------------------- the image
     def render(

@@ -380,8 +380,10 @@ def _check_constant(value: Any, t: MdlType, where: str) -> Any:
                 + (f" (did you mean {hint[0]!r}?)" if hint else "")
             )
         return name
+    if t.name.endswith("[]"):
+        return _check_components(value, t.name[:-2], where)
     if t.name in ("bsdf", "edf", "vdf"):
-        if not (isinstance(value, DfNode) and value.kind == t.name):
+        if value is not None and not (isinstance(value, DfNode) and value.kind == t.name):
             raise ValueError(f"{where} must be a {t.name} (a df node), got {value!r}")
     if t.name == "bool" and not isinstance(value, bool | np.bool_):
         raise ValueError(f"{where} must be a bool, got {value!r}")
@@ -407,6 +409,34 @@ class _StateDefault:
 _REQ = inspect.Parameter.empty
 _TANGENT_U = _StateDefault("state::texture_tangent_u(0)")
 _SAME_AS_U = _StateDefault("roughness_u")
+_NORMAL = _StateDefault("state::normal()")
+#: ``bsdf_component[<N>]`` / ``color_bsdf_component[<N>]`` (the mixers' edf overloads take
+#: ``edf_component`` / ``color_edf_component`` arrays through the same parameter)
+BsdfComponents = Annotated[Any, MdlType("bsdf_component[]")]
+ColorBsdfComponents = Annotated[Any, MdlType("color_bsdf_component[]")]
+_ARRAY_KINDS = {"bsdf_component": ("bsdf_component", "edf_component"),
+                "color_bsdf_component": ("color_bsdf_component", "color_edf_component")}
+
+
+def _check_components(value: Any, element: str, where: str) -> tuple:
+    """An array argument: a list or tuple of component nodes of one kind."""
+    kinds = _ARRAY_KINDS.get(element, (element,))
+    if not isinstance(value, list | tuple) or not all(
+            isinstance(v, DfNode) and v.kind in kinds for v in value):
+        raise ValueError(
+            f"{where} must be an array (a list) of {' or '.join(kinds)} nodes, e.g. "
+            f"[df.{element}(weight=0.5, component=...)], got {value!r}")
+    if len({v.kind for v in value}) > 1:
+        raise ValueError(f"{where} mixes {' and '.join(sorted({v.kind for v in value}))} "
+                         "components; use one kind")
+    return tuple(value)
+
+
+def _layer_params(weight_type, weight_default) -> tuple:
+    return (("weight", weight_type, weight_default), ("layer", BsdfArg, None),
+            ("base", BsdfArg, None), ("normal", Float3, _NORMAL))
+
+
 _PI = float(np.pi)
 
 #: MDL signatures of the distribution functions: name -> (kind, ((param, type, default),...)).
@@ -461,9 +491,46 @@ DF_SIGNATURES: Mapping[str, tuple[str, tuple[tuple[str, Any, Any], ...]]] = Mapp
         ("directional_bias", Float, 0.0),
         ("handle", String, ""),
     )),
+    # layers, mixes and modifiers (render.df.weighted_layer ... directional_factor)
+    "weighted_layer": ("bsdf", _layer_params(Float, 1.0)),
+    "color_weighted_layer": ("bsdf", _layer_params(Color, (1.0, 1.0, 1.0))),
+    "fresnel_layer": ("bsdf", (("ior", Float, _REQ),) + _layer_params(Float, 1.0)),
+    "color_fresnel_layer": ("bsdf", (("ior", Color, _REQ),)
+                            + _layer_params(Color, (1.0, 1.0, 1.0))),
+    "custom_curve_layer": ("bsdf", (
+        ("normal_reflectivity", Float, _REQ),
+        ("grazing_reflectivity", Float, 1.0),
+        ("exponent", Float, 5.0),
+    ) + _layer_params(Float, 1.0)),
+    "color_custom_curve_layer": ("bsdf", (
+        ("normal_reflectivity", Color, _REQ),
+        ("grazing_reflectivity", Color, (1.0, 1.0, 1.0)),
+        ("f82_factor", Color, (1.0, 1.0, 1.0)),
+        ("exponent", Float, 5.0),
+    ) + _layer_params(Color, (1.0, 1.0, 1.0))),
+    "bsdf_component": ("bsdf_component", (("weight", Float, 0.0), ("component", BsdfArg, None))),
+    "color_bsdf_component": ("color_bsdf_component", (
+        ("weight", Color, (0.0, 0.0, 0.0)), ("component", BsdfArg, None))),
+    "edf_component": ("edf_component", (("weight", Float, 0.0), ("component", EdfArg, None))),
+    "color_edf_component": ("color_edf_component", (
+        ("weight", Color, (0.0, 0.0, 0.0)), ("component", EdfArg, None))),
+    "normalized_mix": ("bsdf", (("components", BsdfComponents, _REQ),)),
+    "clamped_mix": ("bsdf", (("components", BsdfComponents, _REQ),)),
+    "color_normalized_mix": ("bsdf", (("components", ColorBsdfComponents, _REQ),)),
+    "color_clamped_mix": ("bsdf", (("components", ColorBsdfComponents, _REQ),)),
+    "tint": ("bsdf", (("tint", Color, _REQ), ("base", BsdfArg, _REQ))),
+    "directional_factor": ("bsdf", (
+        ("normal_tint", Color, (1.0, 1.0, 1.0)),
+        ("grazing_tint", Color, (1.0, 1.0, 1.0)),
+        ("f82_factor", Color, (1.0, 1.0, 1.0)),
+        ("exponent", Float, 5.0),
+        ("base", BsdfArg, None),
+    )),
 })
 
 _KIND_TYPES = {"bsdf": BsdfArg, "edf": EdfArg, "vdf": VdfArg}
+_KIND_TYPES.update({k: Annotated[Any, MdlType(k)] for k in (
+    "bsdf_component", "color_bsdf_component", "edf_component", "color_edf_component")})
 #: renderer context a df class may take (not MDL arguments)
 _CONTEXT = ("ior_outside", "ior_inside", "thin_walled", "object_to_local")
 
@@ -527,6 +594,9 @@ class DfNode:
     @property
     def kind(self) -> str:
         """``"bsdf"``, ``"edf"`` or ``"vdf"``."""
+        components = self.kwargs.get("components")
+        if components and components[0].kind in ("edf_component", "color_edf_component"):
+            return "edf"  # the mixers' edf overloads
         return DF_SIGNATURES[self.name][0]
 
     @property
@@ -552,13 +622,19 @@ class DfNode:
         **context
             Renderer values passed to df classes that take them: ``ior_outside``,
             ``ior_inside`` ((n,) or float), ``thin_walled`` (bool), ``object_to_local``
-            ((n, 3, 3), for ``spot_edf``).
+            ((n, 3, 3), for ``spot_edf``).  Nested dfs (a layer's ``layer`` and ``base``,
+            mix components) are bound with the same context plus ``frame_normal``, the
+            (n, 3) object-space normal of the frame they are evaluated in: a layer's
+            ``normal`` for its ``layer``, the inherited one for everything else.
 
         Returns
         -------
         Bsdf or Edf
             A ``tangent_u`` argument (object space) is expressed in the local frame
-            ``Frame.from_normal_tangent(state.normal, state.tangent_u)``.
+            ``Frame.from_normal_tangent(state.normal, state.tangent_u)`` (the
+            ``frame_normal`` instead of ``state.normal`` inside a layer with its own
+            normal); a layer's ``normal`` (default ``state::normal()``) is expressed in
+            that frame too, with ``tangent_u`` orienting the layer's frame.
 
         Raises
         ------
@@ -569,6 +645,7 @@ class DfNode:
         """
         import render.df as df_module
 
+        frame_normal = context.pop("frame_normal", None)
         unknown = set(context) - set(_CONTEXT)
         if unknown:
             raise ValueError(f"unknown bind context {sorted(unknown)}; allowed: {_CONTEXT}")
@@ -580,15 +657,26 @@ class DfNode:
         accepted = inspect.signature(cls).parameters
         params = _df_params(self.name)
         kw: dict[str, Any] = {}
+        # the frame this df is evaluated in: the material's, or an enclosing layer's
+        frame_n = state.normal if frame_normal is None else frame_normal
+        inner = context if frame_normal is None else dict(context, frame_normal=frame_normal)
+        layer_context = inner
+        is_layer = "normal" in params and params["normal"][1] is _NORMAL
+        if is_layer and ("normal" in self.kwargs or frame_normal is not None):
+            kw["normal"], kw["tangent_u"], own = _layer_normal(
+                self.kwargs.get("normal"), state, frame_n, self.name)
+            layer_context = dict(context, frame_normal=own)
         for key, value in self.kwargs.items():
             t, default = params[key]
-            if key == "handle":
+            if key == "handle" or (is_layer and key == "normal"):
                 continue  # handles only tag lobes for light-path expressions
             if isinstance(value, DfNode):
-                value = value.bind(state, **context)
+                value = value.bind(state, **(layer_context if key == "layer" else inner))
+            elif t.name.endswith("[]"):
+                value = [v.bind(state, **inner) for v in value]
             elif key == "tangent_u":
                 tangent = evaluate(value, state, "float3", f"df::{self.name}(tangent_u)")
-                value = Frame.from_normal_tangent(state.normal, state.tangent_u).to_local(tangent)
+                value = Frame.from_normal_tangent(frame_n, state.tangent_u).to_local(tangent)
             elif callable(value) and t.name in _WIDTH:
                 value = evaluate(value, state, t.name, f"df::{self.name}({key})")
             if key not in accepted:
@@ -607,6 +695,23 @@ class DfNode:
     def __repr__(self) -> str:
         args = ", ".join(f"{k}: {_short(v)}" for k, v in self.kwargs.items())
         return f"df::{self.name}({args})"
+
+
+def _layer_normal(value: Any, state: ShadingState, frame_normal: np.ndarray,
+                  name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A layer's ``normal`` argument (None: ``state::normal()``) for its df class.
+
+    Returns the normal and ``state.tangent_u`` in the local frame of ``frame_normal``,
+    and the normalised object-space normal (zero rows fall back to ``frame_normal``).
+    """
+    from render.numerics import unitize
+
+    raw = state.normal if value is None else evaluate(value, state, "float3",
+                                                      f"df::{name}(normal)")
+    own, ok = unitize(np.asarray(raw, dtype=np.float64))
+    own = np.where(ok[:, None], own, frame_normal)
+    frame = Frame.from_normal_tangent(frame_normal, state.tangent_u)
+    return frame.to_local(own), frame.to_local(state.tangent_u), own
 
 
 def _equal(a: Any, b: Any) -> bool:
@@ -905,8 +1010,8 @@ class material:  # noqa: N801
             if not use_backface:
                 intensity[~front] = 0.0  # surface.emission is front side only
             if np.any(intensity != 0.0):
-                if emission.emission.name == "spot_edf":  # object space -> local frame
-                    context["object_to_local"] = np.stack([frame.s, frame.t, frame.n], axis=1)
+                # object space -> local frame (spot_edf, also inside edf mixes)
+                context["object_to_local"] = np.stack([frame.s, frame.t, frame.n], axis=1)
                 edf = emission.emission.bind(shading_state, **context)
         return Shading(bsdf=bsdf, edf=edf, intensity=intensity, mode=emission.mode,
                        normal=normal, cutout_opacity=opacity, frame=frame,

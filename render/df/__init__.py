@@ -10,17 +10,64 @@ Conventions (directions, sides, IORs): :mod:`render.frame`; interfaces:
 :mod:`render.bsdf`.
 """
 
+from render.df._combine import albedo_estimate
 from render.df._common import ScatterMode
+from render.df._mix import (
+    BsdfComponent,
+    ColorBsdfComponent,
+    ColorEdfComponent,
+    EdfComponent,
+    bsdf_component,
+    color_bsdf_component,
+    color_edf_component,
+    edf_component,
+)
 from render.df.backscattering_glossy_reflection_bsdf import (
     BackscatteringGlossyReflectionBsdf,
     backscattering_glossy_reflection_bsdf,
 )
+from render.df.clamped_mix import (
+    ClampedMix,
+    ClampedMixEdf,
+    ColorClampedMix,
+    ColorClampedMixEdf,
+    clamped_mix,
+    color_clamped_mix,
+)
+from render.df.custom_curve_layer import (
+    ColorCustomCurveLayer,
+    CustomCurveLayer,
+    color_custom_curve_layer,
+    custom_curve_layer,
+)
 from render.df.diffuse_edf import DiffuseEdf, diffuse_edf
 from render.df.diffuse_reflection_bsdf import DiffuseReflectionBsdf, diffuse_reflection_bsdf
 from render.df.diffuse_transmission_bsdf import DiffuseTransmissionBsdf, diffuse_transmission_bsdf
+from render.df.directional_factor import DirectionalFactor, directional_factor
+from render.df.fresnel_layer import (
+    ColorFresnelLayer,
+    FresnelLayer,
+    color_fresnel_layer,
+    fresnel_layer,
+)
+from render.df.normalized_mix import (
+    ColorNormalizedMix,
+    ColorNormalizedMixEdf,
+    NormalizedMix,
+    NormalizedMixEdf,
+    color_normalized_mix,
+    normalized_mix,
+)
 from render.df.simple_glossy_bsdf import SimpleGlossyBsdf, simple_glossy_bsdf
 from render.df.specular_bsdf import SpecularBsdf, specular_bsdf
 from render.df.spot_edf import SpotEdf, spot_edf
+from render.df.tint import Tint, tint
+from render.df.weighted_layer import (
+    ColorWeightedLayer,
+    WeightedLayer,
+    color_weighted_layer,
+    weighted_layer,
+)
 
 #: MDL's ``df::scatter_mode`` enumerators
 scatter_reflect = ScatterMode.scatter_reflect
@@ -46,4 +93,47 @@ __all__ = [
     "diffuse_edf",
     "SpotEdf",
     "spot_edf",
+    # layers, mixes and modifiers (MDL's combiners)
+    "WeightedLayer",
+    "weighted_layer",
+    "ColorWeightedLayer",
+    "color_weighted_layer",
+    "FresnelLayer",
+    "fresnel_layer",
+    "ColorFresnelLayer",
+    "color_fresnel_layer",
+    "CustomCurveLayer",
+    "custom_curve_layer",
+    "ColorCustomCurveLayer",
+    "color_custom_curve_layer",
+    "BsdfComponent",
+    "bsdf_component",
+    "ColorBsdfComponent",
+    "color_bsdf_component",
+    "EdfComponent",
+    "edf_component",
+    "ColorEdfComponent",
+    "color_edf_component",
+    "NormalizedMix",
+    "NormalizedMixEdf",
+    "normalized_mix",
+    "ColorNormalizedMix",
+    "ColorNormalizedMixEdf",
+    "color_normalized_mix",
+    "ClampedMix",
+    "ClampedMixEdf",
+    "clamped_mix",
+    "ColorClampedMix",
+    "ColorClampedMixEdf",
+    "color_clamped_mix",
+    "Tint",
+    "tint",
+    "DirectionalFactor",
+    "directional_factor",
+    "albedo_estimate",
 ]
+
+# volumes (render.volume uses it as the phase function of homogeneous media)
+from render.df.anisotropic_vdf import AnisotropicVdf, anisotropic_vdf  # noqa: E402
+
+__all__ += ["AnisotropicVdf", "anisotropic_vdf"]

@@ -1,0 +1,173 @@
+"""MDL ``df::directional_factor``: a Bsdf scaled by a Schlick-like curve of the half-vector angle.
+
+MDL signature::
+
+    bsdf directional_factor(color normal_tint = color(1.0), color grazing_tint = color(1.0),
+                            color f82_factor = color(1.0),                          // 1.10
+                            float exponent = 5.0, bsdf base = bsdf());
+
+Model (libbsdf, ``reference/mdl-distribution-functions.md`` §4): the factor is the
+custom curve of ``custom_curve_layer`` with Hoffman's F82 tint,
+``C(c) = saturate(R0 + (R90 - R0)(1 - c)^p - a c (1 - c)^6)`` with ``R0 =
+saturate(normal_tint)``, ``R90 = saturate(grazing_tint)``, ``p = max(exponent, 0)``,
+evaluated at ``c = wo.h`` for the reflection half vector ``h`` (a transmitted ``wi`` is
+mirrored through the tangent plane first)::
+
+    eval = C(wo.h) base.eval(wo, wi),    pdf = base.pdf (0 where the product is)
+
+The sample weight is scaled by ``C`` at the sampled direction.  Energy: never more
+than the base (``C <= 1``).  ``albedo`` is exact for a constant curve and otherwise
+integrated through the base's sampler (:data:`render.df._combine.ALBEDO_POINTS` QMC
+points).  The EDF overload (MDL 1.7) is not implemented.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
+from render.bsdf import (
+    Bsdf,
+    BsdfSample,
+    Lobe,
+    check_dirs,
+    check_samples,
+    lane_color,
+    lane_float,
+    lanes,
+)
+from render.df._combine import (
+    Memo,
+    albedo_correction,
+    any_positive,
+    cheap_albedo,
+    check_child,
+    child_eval_pdf,
+    child_sample,
+    is_mirror,
+)
+from render.df._layer import f82_curve
+from render.frame import mirror_z
+from render.numerics import check_finite, saturate, unitize
+
+__all__ = ["DirectionalFactor", "directional_factor"]
+
+
+class DirectionalFactor(Bsdf):
+    """``df::directional_factor`` over lanes.
+
+    Parameters
+    ----------
+    normal_tint, grazing_tint : float, (3,) or (n, 3)
+        ``R0`` and ``R90``, saturated.
+    f82_factor : float, (3,) or (n, 3)
+        Hoffman's F82 tint, saturated (1: none).
+    exponent : float or (n,)
+        Negative values act as 0.
+    base : Bsdf or None
+        None is MDL's black ``bsdf()``.
+
+    Examples
+    --------
+    >>> from render.df import specular_bsdf
+    >>> d = directional_factor(normal_tint=(0.9, 0.5, 0.1), grazing_tint=1.0, exponent=5.0,
+    ...                        base=specular_bsdf())
+    >>> wo = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]])
+    >>> np.round(d.albedo(wo), 6).tolist()   # R0 + (1 - R0) 0.2^5 at 36.9 degrees
+    [[0.9, 0.5, 0.1], [0.900032, 0.50016, 0.100288]]
+    """
+
+    def __init__(self, normal_tint: ArrayLike = 1.0, grazing_tint: ArrayLike = 1.0,
+                 f82_factor: ArrayLike = 1.0, exponent: ArrayLike = 5.0, base=None):
+        self.normal_tint = saturate(lane_color(normal_tint, "normal_tint"))
+        self.grazing_tint = saturate(lane_color(grazing_tint, "grazing_tint"))
+        self.f82_factor = saturate(lane_color(f82_factor, "f82_factor"))
+        self.exponent = np.maximum(lane_float(exponent, "exponent"), 0.0)
+        self.base = check_child(base, "base")
+        self.lobes = Lobe.NONE if self.base is None else self.base.lobes
+        self._cheap_memo = Memo()
+
+    def __repr__(self) -> str:
+        return (f"directional_factor(normal_tint={self.normal_tint.tolist()}, "
+                f"grazing_tint={self.grazing_tint.tolist()}, exponent={self.exponent.tolist()}, "
+                f"base={self.base!r})")
+
+    def _params(self, n: int):
+        return (
+            np.broadcast_to(lanes(self.normal_tint, n, "normal_tint"), (n, 3)),
+            np.broadcast_to(lanes(self.grazing_tint, n, "grazing_tint"), (n, 3)),
+            np.broadcast_to(lanes(self.f82_factor, n, "f82_factor"), (n, 3)),
+            np.broadcast_to(lanes(self.exponent, n, "exponent"), (n,)),
+        )
+
+    def _factor(self, wo: Vec3, wi: Vec3) -> Rgb:
+        """``C(wo.h)`` with the reflection half vector (transmitted ``wi`` mirrored)."""
+        n = len(wo)
+        s = np.where(wo[:, 2] < 0.0, -1.0, 1.0)[:, None]
+        o = wo * np.concatenate([np.ones((n, 2)), s], axis=1)
+        i = wi * np.concatenate([np.ones((n, 2)), s], axis=1)
+        h, ok = unitize(o + mirror_z(i, i[:, 2] < 0.0))
+        h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
+        kh = np.einsum("ij,ij->i", o, h)
+        r0, r90, f82, p = self._params(n)
+        return np.where((kh >= 0.0)[:, None], f82_curve(kh, r0, r90, f82, p), 0.0)
+
+    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
+        wo, wi = check_dirs(wo, wi)
+        e, p = child_eval_pdf(self.base, wo, wi)
+        value = self._factor(wo, wi) * e
+        pdf = np.where(any_positive(value), p, 0.0)
+        value = np.where((pdf > 0)[:, None], value, 0.0)
+        return (check_finite("directional_factor.eval", value, True),
+                check_finite("directional_factor.pdf", pdf, True))
+
+    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
+        return self.eval_pdf(wo, wi)[0]
+
+    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
+        return self.eval_pdf(wo, wi)[1]
+
+    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
+        (wo,) = check_dirs(wo, names=("wo",))
+        u1, u2 = check_samples(len(wo), u1, u2)
+        s = child_sample(self.base, wo, u1, u2)
+        wi = np.where(s.valid[:, None], s.wi, np.array([0.0, 0.0, 1.0]))
+        weight = self._factor(wo, wi) * s.weight
+        ok = s.valid & any_positive(weight)
+        return BsdfSample(
+            np.where(ok[:, None], s.wi, 0.0),
+            np.where(ok, s.pdf, 0.0),
+            np.where(ok[:, None], weight, 0.0),
+            np.where(ok, s.lobe, 0).astype(np.int32),
+        ).checked()
+
+    def _constant(self, n: int) -> bool:
+        r0, r90, f82, p = self._params(n)
+        return bool(np.all(f82 == 1.0) and (np.all(r0 == r90) or np.all(p == 0.0)))
+
+    def albedo(self, wo: Vec3) -> Rgb:
+        """``C(nk1) base.albedo`` plus the integral of ``C(wo.h) - C(nk1)`` over the base's
+        lobe (:func:`render.df._combine.albedo_correction`; exact for a mirror base or a
+        constant curve)."""
+        (wo,) = check_dirs(wo, names=("wo",))
+        n = len(wo)
+        if self.base is None:
+            return np.zeros((n, 3))
+        r0, r90, f82, p = self._params(n)
+        est = f82_curve(np.abs(wo[:, 2]), r0, r90, f82, p)
+        out = est * self.base.albedo(wo)
+        if not (self._constant(n) or is_mirror(self.base)):
+            out += albedo_correction(self.base, wo, lambda wi: self._factor(wo, wi), est)
+        return np.clip(out, 0.0, None)
+
+    def _cheap_albedo(self, wo: Vec3) -> Rgb:
+        return self._cheap_memo.get(wo, lambda: self._cheap_albedo_now(wo))
+
+    def _cheap_albedo_now(self, wo: Vec3) -> Rgb:
+        n = len(wo)
+        r0, r90, f82, p = self._params(n)
+        c = f82_curve(np.abs(wo[:, 2]), r0, r90, f82, p)
+        return c * cheap_albedo(self.base, wo)
+
+
+directional_factor = DirectionalFactor

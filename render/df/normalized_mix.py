@@ -1,0 +1,110 @@
+"""MDL ``df::normalized_mix`` and ``df::color_normalized_mix``: components scaled to sum at most 1.
+
+MDL signatures (bsdf, edf and vdf overloads; vdf is not implemented)::
+
+    bsdf normalized_mix(bsdf_component[<N>] components);
+    edf  normalized_mix(edf_component[<N>] components);
+    bsdf color_normalized_mix(color_bsdf_component[<N>] components);     // 1.4
+    edf  color_normalized_mix(color_edf_component[<N>] components);      // 1.4
+
+Model (libbsdf, ``reference/mdl-distribution-functions.md`` §3.3): ``w_i = max(weight_i, 0)``;
+where ``S = sum_i w_i > 1`` every ``w_i`` is divided by ``S``; then
+``eval = sum_i w_i eval_i``.  ``color_normalized_mix`` normalises **each channel by its own
+sum** (libbsdf; the spec divides every channel by the largest channel sum).  Sampling
+and the pdf: :mod:`render.df._mix`.  A mix of white lossless components is lossless
+whenever the weights sum to 1 or more.
+
+Examples
+--------
+>>> from render.df import diffuse_reflection_bsdf
+>>> m = normalized_mix([bsdf_component(3.0, diffuse_reflection_bsdf(tint=1.0)),
+...                     bsdf_component(1.0, diffuse_reflection_bsdf(tint=0.0))])
+>>> m.albedo(np.array([[0.0, 0.0, 1.0]])).tolist()
+[[0.75, 0.75, 0.75]]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from render.df._mix import (
+    BsdfComponent,
+    MixBsdf,
+    MixEdf,
+    as_components,
+    bsdf_component,
+    color_bsdf_component,
+    color_edf_component,
+    edf_component,
+)
+
+__all__ = [
+    "normalized_mix",
+    "color_normalized_mix",
+    "NormalizedMix",
+    "ColorNormalizedMix",
+    "NormalizedMixEdf",
+    "ColorNormalizedMixEdf",
+    "bsdf_component",
+    "color_bsdf_component",
+    "edf_component",
+    "color_edf_component",
+]
+
+
+class _Normalized:
+    def weights(self, n: int) -> np.ndarray:
+        """(n, k, 3): ``max(weight, 0)``, divided by the channel's sum where it exceeds 1."""
+        w = np.maximum(self._raw(n), 0.0)
+        s = w.sum(axis=1, keepdims=True)
+        return np.where(s > 1.0, w / np.where(s > 1.0, s, 1.0), w)
+
+
+class NormalizedMix(_Normalized, MixBsdf):
+    """``df::normalized_mix`` over ``bsdf_component`` values (a Bsdf)."""
+
+    _mdl_name = "normalized_mix"
+
+
+class ColorNormalizedMix(_Normalized, MixBsdf):
+    """``df::color_normalized_mix`` over ``color_bsdf_component`` values (a Bsdf)."""
+
+    _color = True
+    _mdl_name = "color_normalized_mix"
+
+
+class NormalizedMixEdf(_Normalized, MixEdf):
+    """``df::normalized_mix`` over ``edf_component`` values (an Edf)."""
+
+    _mdl_name = "normalized_mix"
+
+
+class ColorNormalizedMixEdf(_Normalized, MixEdf):
+    """``df::color_normalized_mix`` over ``color_edf_component`` values (an Edf)."""
+
+    _color = True
+    _mdl_name = "color_normalized_mix"
+
+
+def _dispatch(components, color: bool, bsdf_cls, edf_cls, name: str):
+    comps = as_components(components, color, name)
+    if comps and comps[0]._kind is not BsdfComponent._kind:
+        return edf_cls(comps)
+    return bsdf_cls(comps)
+
+
+def normalized_mix(components):
+    """``df::normalized_mix``: a :class:`NormalizedMix` (Bsdf) or :class:`NormalizedMixEdf`.
+
+    Parameters
+    ----------
+    components : sequence of bsdf_component or edf_component (or ``(weight, df)`` pairs)
+    """
+    return _dispatch(components, False, NormalizedMix, NormalizedMixEdf, "normalized_mix")
+
+
+def color_normalized_mix(components):
+    """``df::color_normalized_mix``: per-channel weights (:class:`ColorNormalizedMix` or
+    :class:`ColorNormalizedMixEdf`)."""
+    return _dispatch(components, True, ColorNormalizedMix, ColorNormalizedMixEdf,
+                     "color_normalized_mix")
