@@ -68,8 +68,15 @@ def render_scene(name: str, spp: int, seed: int, progress: bool = False):
     return render(SCENES / f"{name}.toml", spp=spp, seed=seed, progress=progress)
 
 
-def main(names: list[str]) -> int:
-    names = names or sorted(p.stem for p in SCENES.glob("*.toml"))
+def main(argv: list[str]) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        description="Render the gallery's reference images (slow) and calibrate the "
+                    "regression thresholds from renders at other seeds.")
+    parser.add_argument("names", nargs="*", metavar="SCENE",
+                        help="scene names such as fig_14_28 (default: every scene)")
+    names = parser.parse_args(argv).names or sorted(p.stem for p in SCENES.glob("*.toml"))
     REFERENCE.mkdir(parents=True, exist_ok=True)
     table_path = REFERENCE / "thresholds.json"
     table = json.loads(table_path.read_text()) if table_path.exists() else {}

@@ -14,6 +14,7 @@ BENCHMARKS = {
     "bake_roundtrip.py": ["--sizes", "16", "--samples", "2000"],
     "dicing.py": ["--quick", "--size", "64", "--samples", "500", "--n-max", "64"],
     "render_vs_mitsuba.py": ["--quick"],
+    "bump_vs_displacement.py": ["--quick"],
 }
 
 

@@ -18,6 +18,11 @@ Modules: :mod:`~render.materials.chapter12` (displacement mapping),
 :mod:`~render.materials.chapter14` (vector displacement, profiles),
 :mod:`~render.materials.chapter15` (pw-curves), :mod:`~render.materials.chapter10`
 (noise) and :mod:`~render.materials.earlier` (``diffuse``, ``subsurface_scattering``).
+
+:data:`PARTS_2_3` lists the example materials of chapters 3-8 (Parts 2 and 3: surfaces,
+glass, volumes, layering and mixing, plastic, fabric), in
+:mod:`~render.materials.chapter3` ... :mod:`~render.materials.chapter8`; where a name is
+used twice in the Handbook, the registry keeps one meaning (see those modules' notes).
 """
 
 from __future__ import annotations
@@ -26,9 +31,22 @@ from collections.abc import Callable
 from types import MappingProxyType
 
 from render.material import material
-from render.materials import chapter10, chapter12, chapter13, chapter14, chapter15, earlier
+from render.materials import (
+    chapter3,
+    chapter4,
+    chapter5,
+    chapter6,
+    chapter7,
+    chapter8,
+    chapter10,
+    chapter12,
+    chapter13,
+    chapter14,
+    chapter15,
+    earlier,
+)
 
-__all__ = ["MATERIALS", "CONSTANTS", "PART5"]
+__all__ = ["MATERIALS", "CONSTANTS", "PART5", "PARTS_2_3"]
 
 #: The Part 5 materials (chapters 12-15) by their Handbook names.
 PART5: tuple[str, ...] = (
@@ -59,6 +77,46 @@ _EXTRA = {
 }
 
 
+#: The example materials of chapters 3-8 (Parts 2 and 3) by their Handbook names.
+PARTS_2_3: tuple[str, ...] = (
+    # chapter 3
+    "plaster", "diffuse_transmission", "emission", "emission_with_diffuse_backface",
+    "specular", "mirror", "specular_transmission", "specular_reflection_transmission",
+    "glossy_reflection", "glossy_transmission", "glossy_reflection_transmission",
+    # chapter 4
+    "specular_reflect_transmit", "specular_reflect_transmit_thin_walled",
+    "glossy_reflect_transmit", "glossy_reflect_transmit_layers",
+    "glossy_reflect_transmit_absorb", "glossy_reflect_transmit_absorb_falloff",
+    "subsurface_scattering",
+    # chapter 5
+    "isotropic_volume", "anisotropic_volume", "red_light", "green_light", "blue_light",
+    "blue_scattering", "blue_absorption", "spotlight_emission",
+    # chapter 6 (its glossy and mirror keep Listing 12.8's and Listing 3.5's names)
+    "red", "shiny", "shiny_red", "shiny_red_with_let", "shiny_red_extract", "diffuse",
+    "glossy_over_diffuse", "shiny_red_specialized", "light_blue_ceramic", "shiny_tint",
+    "fresnel_glossy_over_diffuse", "two_glossy_lobes", "diffuse_green_base",
+    "wide_blue_glossy", "narrow_blue_glossy", "two_layers", "three_layers", "four_layers",
+    "two_layers_v1", "three_layers_v1", "four_layers_v1", "five_layers",
+    # chapter 7
+    "phonglike_plastic", "phonglike_plastic_layered", "dielectric_plastic",
+    "dielectric_plastic_two_lobe", "translucency", "translucent_plastic",
+    # chapter 8 (translucency: Listing 8.5 = Listing 7.5)
+    "anisotropic_glossy", "anisotropic_glossy_three_lobes", "warp_and_weft", "iridescent_silk",
+)
+
+#: names of PARTS_2_3 already registered from the Part 5 modules (the same listings)
+_SHARED = {"diffuse": earlier.diffuse, "subsurface_scattering": earlier.subsurface_scattering}
+
+
+def _lookup_parts_2_3(name: str) -> Callable[..., material]:
+    if name in _SHARED:
+        return _SHARED[name]
+    for module in (chapter3, chapter4, chapter5, chapter6, chapter7, chapter8):
+        if name in module.__all__:
+            return getattr(module, name)
+    raise LookupError(name)
+
+
 def _lookup(name: str) -> Callable[..., material]:
     if name == "raise":
         return chapter14.raise_
@@ -71,7 +129,14 @@ def _lookup(name: str) -> Callable[..., material]:
 #: Handbook name -> material function (read-only).
 MATERIALS: MappingProxyType[str, Callable[..., material]] = MappingProxyType(
     {name: _lookup(name) for name in PART5} | _EXTRA
+    | {name: _lookup_parts_2_3(name) for name in PARTS_2_3}
 )
 
-#: Named constants of the listings: ``pink_stone`` (Listing 15.21).
-CONSTANTS: MappingProxyType = MappingProxyType({"pink_stone": earlier.PINK_STONE})
+#: Named constants of the listings: ``pink_stone`` (Listing 15.21); ``white``, ``blue``,
+#: ``orange``, ``yellow`` (section 6.5), ``magenta`` (section 8.6).  (``green`` is left out:
+#: sections 6.5 and 8.6 give it different values.)
+CONSTANTS: MappingProxyType = MappingProxyType({
+    "pink_stone": earlier.PINK_STONE,
+    "white": chapter6.WHITE, "blue": chapter6.BLUE, "orange": chapter6.ORANGE,
+    "yellow": chapter6.YELLOW, "magenta": chapter8.MAGENTA,
+})

@@ -67,3 +67,11 @@ def test_gallery_scene_matches_reference(name, tmp_path):
         f"(max {entry['flip_max']:.4f}), mean difference {mean_diff} (max {mean_tol}); "
         f"images in {tmp_path}"
     )
+
+
+def test_contact_sheet_is_current():
+    import runpy
+
+    sheet = runpy.run_path(str(ROOT / "gallery" / "contact_sheet.py"))["contact_sheet"]()
+    assert (ROOT / "gallery" / "README.md").read_text(encoding="utf-8") == sheet, \
+        "run: python gallery/contact_sheet.py"
