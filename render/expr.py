@@ -9,6 +9,7 @@ Grammar (a small tokenizer and a recursive-descent parser; nothing is ever ``eva
 
     expression := ("-" | "+") expression | primary
     primary    := NUMBER | STRING | name [ "(" [ argument ("," argument)* ] ")" ]
+                | name "[" [ INT ] "]" "(" expression ("," expression)* ")"
                 | "(" expression ")"
     name       := ["::"] IDENT ("::" IDENT)*
     argument   := IDENT ":" expression | expression
@@ -17,6 +18,16 @@ Numbers are MDL literals (``4`` is an int, ``4.0``, ``.5``, ``1e-3``, ``2.0f`` a
 floats); strings are double-quoted with ``\\"``, ``\\\\``, ``\\n``, ``\\t`` escapes;
 ``//`` and ``/* */`` comments are skipped.  Positional arguments come before named ones,
 as in MDL.  Unary minus applies to constant numbers and vectors.
+
+Array constructors ``T[](e1, e2, ...)`` and ``T[N](e1, ..., eN)`` (the Handbook's
+``df::bsdf_component[](df::bsdf_component(weight: 0.5, component: ...), ...)``, §6.4.1)
+take positional elements of type ``T``: the component structs ``bsdf_component``,
+``color_bsdf_component``, ``edf_component``, ``color_edf_component`` (usually
+``df::``-qualified) or the plain types ``float``, ``int``, ``bool``, ``float2``,
+``float3``, ``color``, ``string`` (an int converts to a float; a scalar does not become a
+color).  ``N``, when given, must equal the number of elements.  The mixers'
+``bsdf_component[]`` parameter also takes an ``edf_component[]`` (their edf overloads),
+and such a mix is an edf.
 
 Names are resolved in this order.  The module part of a qualified call, enum value or
 constant must be one of :data:`KNOWN_MODULES` (``df::``, ``state::``, ``tex::``,
@@ -97,6 +108,7 @@ __all__ = [
     "Call",
     "Argument",
     "Negate",
+    "ArrayConstructor",
     "parse",
     "Value",
     "evaluate_expression",
@@ -168,8 +180,8 @@ def _rebuild_error(message, col, fix, line, offset):
 
 @dataclass(frozen=True)
 class Token:
-    """One token: ``kind`` in NUMBER, STRING, IDENT, SCOPE (``::``), ``(``, ``)``, ``,``,
-    ``:``, ``-``, ``+``, EOF; ``value`` is the number or the unescaped string."""
+    """One token: ``kind`` in NUMBER, STRING, IDENT, SCOPE (``::``), ``(``, ``)``, ``[``,
+    ``]``, ``,``, ``:``, ``-``, ``+``, EOF; ``value`` is the number or the unescaped string."""
 
     kind: str
     text: str
@@ -182,7 +194,7 @@ class Token:
 _NUMBER = re.compile(r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?[fFdD]?")
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _ESCAPES = {'"': '"', "\\": "\\", "n": "\n", "t": "\t", "'": "'"}
-_PUNCT = {"(": "(", ")": ")", ",": ",", "-": "-", "+": "+"}
+_PUNCT = {"(": "(", ")": ")", ",": ",", "-": "-", "+": "+", "[": "[", "]": "]"}
 
 
 class _Source:
@@ -379,6 +391,17 @@ class Negate(Node):
     sign: float
 
 
+@dataclass(frozen=True)
+class ArrayConstructor(Node):
+    """``element[size](arguments)``; ``size`` is None for ``element[](...)``."""
+
+    element: Name
+    size: int | None
+    size_offset: int
+    arguments: tuple[Argument, ...]
+    close_offset: int
+
+
 class _Parser:
     def __init__(self, text: str):
         self.src = _Source(text)
@@ -447,6 +470,8 @@ class _Parser:
             return node
         if t.kind in ("IDENT", "SCOPE"):
             name = self.name()
+            if self.tok.kind == "[":
+                return self.array(name)
             if self.tok.kind == "(":
                 return self.call(name)
             return name
@@ -465,7 +490,32 @@ class _Parser:
             self.advance()
         return Name(start.offset, tuple(parts))
 
-    def call(self, callee: Name) -> Call:
+    def array(self, element: Name) -> ArrayConstructor:
+        """``element[N](...)`` or ``element[](...)``; the current token is ``[``."""
+        self.advance()  # "["
+        size, size_offset = None, self.tok.offset
+        example = f"{element.text}[](element, ...)"
+        if self.tok.kind == "NUMBER":
+            number = self.advance()
+            if not isinstance(number.value, int) or number.value < 1:
+                self.fail(f"array size must be a whole number >= 1, got {number.text}", number,
+                          f"write {element.text}[] to take the size from the elements")
+            size = number.value
+        elif self.tok.kind != "]":
+            self.fail(f"expected an array size or ']' after '{element.text}[', found "
+                      f"{self.describe(self.tok)}",
+                      fix=f"an array value is written {example} or {element.text}[N](...)")
+        self.expect("]", "']'", "close the array size with ']'")
+        if self.tok.kind != "(":
+            self.fail(f"expected '(' after '{element.text}[{'' if size is None else size}]', "
+                      f"found {self.describe(self.tok)}",
+                      fix=f"an array value is written {example}; indexing is not supported")
+        call = self.call(element, f"the array {element.text}[]")
+        return ArrayConstructor(element.offset, element, size, size_offset, call.arguments,
+                                call.close_offset)
+
+    def call(self, callee: Name, what: str | None = None) -> Call:
+        what = what or f"the call of {callee.text}"
         self.advance()  # "("
         arguments: list[Argument] = []
         if self.tok.kind != ")":
@@ -479,9 +529,8 @@ class _Parser:
                 if self.tok.kind == ")":
                     break
                 if self.tok.kind == "EOF":
-                    self.fail(f"missing ')' to close the call of {callee.text}",
-                              fix="add ')' at the end")
-                self.fail(f"expected ',' or ')' in the call of {callee.text}, found "
+                    self.fail(f"missing ')' to close {what}", fix="add ')' at the end")
+                self.fail(f"expected ',' or ')' in {what}, found "
                           f"{self.describe(self.tok)}", fix="separate arguments with ','")
         close = self.advance()
         return Call(callee.offset, callee, tuple(arguments), close.offset)
@@ -544,6 +593,14 @@ for _enum_name, _values in (
         _ENUMS[_value] = _t(_enum_name, _values)
 
 _NUMERIC_CONSTANTS = {"PI": math.pi, "TWO_PI": 2.0 * math.pi, "HALF_PI": 0.5 * math.pi}
+#: element types of array constructors ``T[](...)``
+_ARRAY_COMPONENTS = ("bsdf_component", "color_bsdf_component", "edf_component",
+                     "color_edf_component")
+_ARRAY_ELEMENTS = _ARRAY_COMPONENTS + ("float", "int", "bool", "float2", "float3", "color",
+                                       "string")
+#: array parameters that also take another array type (the mixers' edf overloads)
+_ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]",),
+                     "color_bsdf_component[]": ("color_edf_component[]",)}
 _VECTOR_WIDTH = {"float2": 2, "float3": 3, "color": 3}
 _CONSTRUCTORS = ("float2", "float3", "color", "float", "int", "texture_2d", "material",
                  "material_surface", "material_emission", "material_volume", "material_geometry")
@@ -614,6 +671,8 @@ class _Evaluator:
             return self.name(node)
         if isinstance(node, Call):
             return self.call(node)
+        if isinstance(node, ArrayConstructor):
+            return self.array(node)
         raise self.error("unsupported expression", node.offset)  # pragma: no cover
 
     def negate(self, node: Negate) -> Value:
@@ -706,6 +765,8 @@ class _Evaluator:
         if kind == "material":
             return Value(result, _t("material"))
         returns = returns or _t("float")
+        if kind == "df" and getattr(result, "kind", None) in ("bsdf", "edf", "vdf"):
+            returns = _t(result.kind)  # a mix of edf components is an edf
         return Value(result, returns, varying=callable(result) and not isinstance(result, material)
                      and returns.name not in ("bsdf", "edf", "vdf"))
 
@@ -767,16 +828,86 @@ class _Evaluator:
                              f"one of {', '.join(want.values)}")
         if want.name == "float" and v.type.name in ("int", "float"):
             return v.value if v.varying else float(v.value)
-        if want.name == v.type.name:
+        if want.name == v.type.name or v.type.name in _ARRAY_COMPATIBLE.get(want.name, ()):
             return v.value
         fix = None
-        if want.name in _VECTOR_WIDTH and v.type.name in ("int", "float") and not v.varying:
+        if want.name.endswith("[]"):
+            fix = self.array_fix(want.name[:-2], v.type.name)
+        elif want.name in _VECTOR_WIDTH and v.type.name in ("int", "float") and not v.varying:
             fix = f"write {want.name}({v.value})"
         elif {want.name, v.type.name} == {"float3", "color"}:
             fix = f"convert with {want.name}(...)"
         elif want.name == "int" and v.type.name == "float":
             fix = "write an integer, without a decimal point"
         raise self.error(f"{where} must be {_a(str(want))}, got {_a(v.type.name)}", offset, fix)
+
+    # --- arrays ------------------------------------------------------------------
+
+    @staticmethod
+    def array_example(element: str) -> str:
+        """An ``element[]`` array value as MDL writes it."""
+        if element in _ARRAY_COMPONENTS:
+            weight = "color(...)" if element.startswith("color_") else "..."
+            return f"df::{element}[](df::{element}(weight: {weight}, component: ...), ...)"
+        return f"{element}[](..., ...)"
+
+    def array_fix(self, element: str, got: str) -> str:
+        """How to write a ``element[]`` value where ``got`` was given."""
+        if got == element:
+            return f"wrap it in an array: {self.array_example(element)}"
+        return f"write {self.array_example(element)}"
+
+    def array(self, node: ArrayConstructor) -> Value:
+        """``T[](e1, e2, ...)``: a tuple of element values, of type ``T[]``."""
+        element = node.element
+        last = element.parts[-1]
+        if last not in _ARRAY_ELEMENTS:
+            raise self.error(f"unknown array element type {element.text!r}", element.offset,
+                             self.suggest(last, _ARRAY_ELEMENTS)
+                             or f"element types: {', '.join(_ARRAY_ELEMENTS)}")
+        self.check_module(element)
+        label = f"{element.text}[{'' if node.size is None else node.size}]"
+        if not node.arguments:
+            raise self.error(f"{label}() has no elements", node.close_offset,
+                             f"give at least one element: {self.array_example(last)}")
+        if node.size is not None and node.size != len(node.arguments):
+            count = len(node.arguments)
+            raise self.error(
+                f"{label}(...) has {count} element{'' if count == 1 else 's'}, not {node.size}",
+                node.size_offset,
+                f"give {node.size} element{'' if node.size == 1 else 's'}, or write "
+                f"{element.text}[](...) to take the size from the elements")
+        values = []
+        for index, argument in enumerate(node.arguments):
+            if argument.name is not None:
+                raise self.error(f"array elements are positional; {label}(...) has no "
+                                 f"parameter {argument.name!r}", argument.name_offset,
+                                 f"remove '{argument.name}:'")
+            values.append(self.array_element(self.evaluate(argument.value), last, index,
+                                             argument.value.offset, label))
+        return Value(tuple(v.value for v in values), _t(last + "[]"),
+                     any(v.varying for v in values))
+
+    def array_element(self, v: Value, want: str, index: int, offset: int, label: str) -> Value:
+        """Element ``index`` of a ``want[]`` array, converted, or a type error at ``offset``."""
+        if want == "float" and v.type.name in ("int", "float"):
+            return v if v.varying else Value(float(v.value), _t("float"))
+        if v.type.name == want:
+            return v
+        where = f"element {index + 1} of {label}(...)"
+        fix = None
+        if want in _VECTOR_WIDTH and v.type.name in ("int", "float") and not v.varying:
+            fix = f"write {want}({v.value})"
+        elif {want, v.type.name} == {"float3", "color"}:
+            fix = f"convert with {want}(...)"
+        elif want == "int" and v.type.name == "float":
+            fix = "write an integer, without a decimal point"
+        elif want in _ARRAY_COMPONENTS and v.type.name in ("bsdf", "edf"):
+            weight = "color(...)" if want.startswith("color_") else "..."
+            fix = f"wrap it: df::{want}(weight: {weight}, component: ...)"
+        elif want in _ARRAY_COMPONENTS and v.type.name in _ARRAY_COMPONENTS:
+            fix = f"write df::{v.type.name}[](...) for {v.type.name} elements"
+        raise self.error(f"{where} must be {_a(want)}, got {_a(v.type.name)}", offset, fix)
 
     # --- constructors --------------------------------------------------------------
 

@@ -17,7 +17,9 @@ like):
   diffuse edf); their radiance is evaluated by the scene (the material) at the sampled
   point, so a varying intensity works too;
 * environments: ``radiance`` L seen in every direction (constant), or a lat-long image
-  times ``scale``.
+  times ``scale``; the sun-and-sky environment (:class:`render.sky.SunAndSky`, the
+  Handbook's ``base::sun_and_sky``) gives the sun's irradiance ``E`` on a surface
+  facing it and the sky in luminance units (1e-4 per cd/m^2).
 
 World space is right-handed with y up.  The lat-long mapping of an environment image is
 ``u = 0.5 + atan2(x, -z) / (2 pi)``, ``v = acos(y) / pi`` (top row = straight up,

@@ -41,6 +41,7 @@ Additions to the render contract (``/tmp/render_contract.md``):
 from __future__ import annotations
 
 import difflib
+import functools
 import inspect
 import typing
 from collections.abc import Callable, Mapping
@@ -535,9 +536,22 @@ _KIND_TYPES.update({k: Annotated[Any, MdlType(k)] for k in (
 _CONTEXT = ("ior_outside", "ior_inside", "thin_walled", "object_to_local")
 
 
-def _df_params(name: str) -> dict[str, tuple[MdlType, Any]]:
+@functools.lru_cache(maxsize=None)
+def _df_params(name: str) -> Mapping[str, tuple[MdlType, Any]]:
+    """``{param: (MdlType, default)}`` of a df, built once per name (read-only)."""
     _, params = DF_SIGNATURES[name]
-    return {p: (_mdl_type_of(t), d) for p, t, d in params}
+    return MappingProxyType({p: (_mdl_type_of(t), d) for p, t, d in params})
+
+
+@functools.lru_cache(maxsize=None)
+def _accepted_parameters(cls: Callable) -> frozenset[str]:
+    """Parameter names of a :mod:`render.df` class, once per class (``inspect.signature``
+    on every bind cost 3-5 % of render time)."""
+    return frozenset(inspect.signature(cls).parameters)
+
+
+# what DfNode.bind does with each argument (the per-node plan, see DfNode._bind_plan)
+_BIND_NODE, _BIND_ARRAY, _BIND_TANGENT, _BIND_VARYING, _BIND_CONSTANT, _BIND_REJECT = range(6)
 
 
 @dataclass(frozen=True, eq=False)
@@ -643,44 +657,33 @@ class DfNode:
             no implementation in :mod:`render.df`; or a parameter that the implementation
             does not support yet was given a non-default value.
         """
-        import render.df as df_module
-
         frame_normal = context.pop("frame_normal", None)
         unknown = set(context) - set(_CONTEXT)
         if unknown:
             raise ValueError(f"unknown bind context {sorted(unknown)}; allowed: {_CONTEXT}")
-        cls = getattr(df_module, self.name, None)
-        if cls is None:
-            raise ValueError(
-                f"df::{self.name} has no implementation in render.df yet; it cannot be shaded"
-            )
-        accepted = inspect.signature(cls).parameters
-        params = _df_params(self.name)
+        cls, accepted, is_layer, steps = self._bind_plan()
         kw: dict[str, Any] = {}
         # the frame this df is evaluated in: the material's, or an enclosing layer's
         frame_n = state.normal if frame_normal is None else frame_normal
         inner = context if frame_normal is None else dict(context, frame_normal=frame_normal)
         layer_context = inner
-        is_layer = "normal" in params and params["normal"][1] is _NORMAL
         if is_layer and ("normal" in self.kwargs or frame_normal is not None):
             kw["normal"], kw["tangent_u"], own = _layer_normal(
                 self.kwargs.get("normal"), state, frame_n, self.name)
             layer_context = dict(context, frame_normal=own)
-        for key, value in self.kwargs.items():
-            t, default = params[key]
-            if key == "handle" or (is_layer and key == "normal"):
-                continue  # handles only tag lobes for light-path expressions
-            if isinstance(value, DfNode):
+        for key, action, value, known, default, type_name in steps:
+            if action == _BIND_NODE:
                 value = value.bind(state, **(layer_context if key == "layer" else inner))
-            elif t.name.endswith("[]"):
+            elif action == _BIND_ARRAY:
                 value = [v.bind(state, **inner) for v in value]
-            elif key == "tangent_u":
+            elif action == _BIND_TANGENT:
                 tangent = evaluate(value, state, "float3", f"df::{self.name}(tangent_u)")
                 value = Frame.from_normal_tangent(frame_n, state.tangent_u).to_local(tangent)
-            elif callable(value) and t.name in _WIDTH:
-                value = evaluate(value, state, t.name, f"df::{self.name}({key})")
-            if key not in accepted:
-                if not callable(value) and _equal(value, default):
+            elif action == _BIND_VARYING:
+                value = evaluate(value, state, type_name, f"df::{self.name}({key})")
+            if not known:
+                # (constants equal to their defaults are already out of the plan)
+                if action != _BIND_REJECT and not callable(value) and _equal(value, default):
                     continue
                 raise ValueError(
                     f"df::{self.name}({key}) is not implemented by render.df.{self.name} yet; "
@@ -691,6 +694,55 @@ class DfNode:
             if key in accepted:
                 kw[key] = value
         return cls(**kw)
+
+    def _bind_plan(self) -> tuple[Callable, frozenset, bool, tuple]:
+        """The per-node constant part of :meth:`bind`, worked out on the first bind.
+
+        Returns ``(cls, accepted, is_layer, steps)``: the :mod:`render.df` class, its
+        parameter names, whether the df is a layer with a ``normal``, and per argument
+        ``(key, action, value, accepted, default, MDL type name)`` in argument order
+        (handles, a layer's ``normal`` and unsupported constants equal to their defaults
+        are left out).  The node is immutable, so the plan is kept on it (``__dict__``;
+        the dataclass is frozen); a node that cannot be bound raises on every bind, as
+        before.
+        """
+        plan = self.__dict__.get("_plan")
+        if plan is not None:
+            return plan
+        import render.df as df_module
+
+        cls = getattr(df_module, self.name, None)
+        if cls is None:
+            raise ValueError(
+                f"df::{self.name} has no implementation in render.df yet; it cannot be shaded"
+            )
+        accepted = _accepted_parameters(cls)
+        params = _df_params(self.name)
+        is_layer = "normal" in params and params["normal"][1] is _NORMAL
+        steps = []
+        for key, value in self.kwargs.items():
+            t, default = params[key]
+            if key == "handle" or (is_layer and key == "normal"):
+                continue  # handles only tag lobes for light-path expressions
+            if isinstance(value, DfNode):
+                action = _BIND_NODE
+            elif t.name.endswith("[]"):
+                action = _BIND_ARRAY
+            elif key == "tangent_u":
+                action = _BIND_TANGENT
+            elif callable(value) and t.name in _WIDTH:
+                action = _BIND_VARYING
+            else:
+                action = _BIND_CONSTANT
+            known = key in accepted
+            if not known and action == _BIND_CONSTANT:
+                if not callable(value) and _equal(value, default):
+                    continue
+                action = _BIND_REJECT
+            steps.append((key, action, value, known, default, t.name))
+        plan = (cls, accepted, is_layer, tuple(steps))
+        self.__dict__["_plan"] = plan
+        return plan
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}: {_short(v)}" for k, v in self.kwargs.items())

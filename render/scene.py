@@ -33,9 +33,11 @@ its figure captions, parsed by :mod:`render.expr`.  Example (the Handbook's stag
 
 Light types: ``point`` (position, intensity), ``spot`` (position, direction or look_at,
 intensity, cutoff_angle, beam_width), ``directional`` (direction, irradiance),
-``environment`` (radiance, or file = lat-long EXR with scale and rotation), ``quad``
-(center, normal, size, up, radiance or intensity) and ``sphere`` (center, radius,
-radiance or intensity).  Units: :mod:`render.lights`.
+``environment`` (radiance, or file = lat-long EXR with scale and rotation),
+``sun_and_sky`` (sun_direction, or elevation and azimuth in degrees; turbidity,
+intensity, sun_radius, sun_scale, sky_scale, ground_albedo: :class:`render.sky.SunAndSky`),
+``quad`` (center, normal, size, up, radiance or intensity) and ``sphere`` (center,
+radius, radiance or intensity).  Units: :mod:`render.lights`.
 
 Surfaces by name (:func:`displacement.view.make_surface`: ``square``, ``plane``,
 ``sphere``, ``cylinder``, ``torus``, ``cube``), or as a table ``{ type = NAME, ... }``
@@ -971,7 +973,7 @@ class _Parser:
         )
 
     def light(self, t: dict, i: int):
-        kinds = {"point", "spot", "directional", "environment", "quad", "sphere"}
+        kinds = {"point", "spot", "directional", "environment", "sun_and_sky", "quad", "sphere"}
         kind = t.get("type")
         if kind not in kinds:
             raise self.error(
@@ -1042,6 +1044,8 @@ class _Parser:
                         self._num(t, "rotation", sec, i, 0.0),
                     ), None
                 return ConstantEnvironment(self._color(t, "radiance", sec, i, np.ones(3))), None
+            if kind == "sun_and_sky":
+                return self.sun_and_sky(t, i), None
             # emissive geometry
             self._check_keys(
                 t,
@@ -1088,6 +1092,50 @@ class _Parser:
             raise
         except ValueError as e:
             raise self.error(f"lights[{i}]: {e}", sec, i) from None
+
+
+    def sun_and_sky(self, t: dict, i: int):
+        from render.sky import SunAndSky, sun_direction_from_angles
+
+        sec = "lights"
+        numbers = ("turbidity", "intensity", "sun_radius", "sun_scale", "sky_scale")
+        self._check_keys(
+            t,
+            {"type", "name", "sun_direction", "elevation", "azimuth", "ground_albedo", *numbers},
+            sec,
+            i,
+        )
+        if "sun_direction" in t and ("elevation" in t or "azimuth" in t):
+            raise self.error(
+                f"lights[{i}]: give sun_direction or elevation/azimuth, not both",
+                sec,
+                i,
+                "sun_direction",
+            )
+        if "sun_direction" in t:
+            direction = self._vec(t, "sun_direction", sec, i)
+            if not np.any(direction):
+                raise self.error(
+                    f"lights[{i}]: sun_direction must not be [0, 0, 0]", sec, i, "sun_direction"
+                )
+        else:
+            elevation = self._num(t, "elevation", sec, i, 45.0)
+            if not -90.0 <= elevation <= 90.0:
+                raise self.error(
+                    f"lights[{i}]: elevation must be in [-90, 90] degrees, got {elevation!r}",
+                    sec,
+                    i,
+                    "elevation",
+                )
+            direction = sun_direction_from_angles(elevation, self._num(t, "azimuth", sec, i, 0.0))
+        kwargs = {k: self._num(t, k, sec, i) for k in numbers if k in t}
+        if "ground_albedo" in t:
+            kwargs["ground_albedo"] = self._color(t, "ground_albedo", sec, i)
+        try:
+            return SunAndSky(direction, **kwargs)
+        except ValueError as e:
+            key = next((k for k in (*numbers, "ground_albedo") if k in str(e)), None)
+            raise self.error(f"lights[{i}]: {e}", sec, i, key if key in t else None) from None
 
 
 def _plane_axes(normal: np.ndarray, up: np.ndarray):
