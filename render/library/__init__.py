@@ -14,7 +14,8 @@ re-exported, not reimplemented:
 
 New here: coordinate spaces (:mod:`render.library.space`), the grid of chapter 14
 (:mod:`render.library.grid`), the uv tile colours of chapter 13
-(:mod:`render.library.uv`), Perlin noise and marbloid (:mod:`render.library.noise`).
+(:mod:`render.library.uv`), Perlin noise and marbloid (:mod:`render.library.noise`),
+chapter 9's stripes and checkerboards (:mod:`render.library.patterns`).
 :data:`FUNCTIONS` (:mod:`render.library.functions`) holds the same functions as MDL
 calls for material expressions, and :mod:`render.library.resources` finds profiles and
 textures.
@@ -42,6 +43,14 @@ from render.library.noise import (
     summed_noise_color,
     summed_perlin_noise,
 )
+from render.library.patterns import (
+    checkerboard_pattern,
+    exclusive_or,
+    horizontal_stripe_pattern,
+    stripe,
+    uv_as_color,
+    white_above_value,
+)
 from render.library.space import (
     MAPPING_MODES,
     object_position,
@@ -65,6 +74,8 @@ __all__ = [
     "world_position", "world_normal", "position", "position_to_color",
     "near_grid_value", "in_grid_line", "grid_color",
     "scaled_uv_color", "scaled_uv_circle_color",
+    "white_above_value", "uv_as_color", "stripe", "horizontal_stripe_pattern", "exclusive_or",
+    "checkerboard_pattern",
     "plerp", "fade", "grad", "perlin_noise", "summed_perlin_noise", "perlin_noise_color",
     "summed_noise_color", "marbloid_tint",
     "FUNCTIONS",

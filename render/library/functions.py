@@ -23,6 +23,7 @@ from displacement.fields import FIELDS
 from displacement.state import ShadingState
 from render.library import grid as _grid
 from render.library import noise as _noise
+from render.library import patterns as _patterns
 from render.library import space as _space
 from render.library import uv as _uv
 from render.library.resources import INVALID_TEXTURE
@@ -144,6 +145,51 @@ def grid_color(cell_count: Float2 = (4.0, 4.0), line_color: Color = (0.0, 0.0, 0
     args = {"cell_count": cell_count, "line_color": line_color, "bg_color": bg_color,
             "thickness": thickness, "texture_space": texture_space}
     return Varying(lambda s: _grid.grid_color(s, **args), "grid_color", args)
+
+
+# --- chapter 9: coordinate spaces, stripes and checkerboards ---------------------
+
+
+def uvw_position() -> Float3:
+    """Listing 9.14."""
+    return Varying(_space.uvw_position, "uvw_position")
+
+
+def object_position() -> Float3:
+    """Listing 9.12."""
+    return Varying(_space.object_position, "object_position")
+
+
+def world_position() -> Float3:
+    """Listing 9.13."""
+    return Varying(_space.world_position, "world_position")
+
+
+def white_above_value(y_value: Float = 0.0) -> Color:
+    """Listings 9.1-9.3."""
+    return Varying(lambda s: _patterns.white_above_value(s, y_value), "white_above_value",
+                   {"y_value": y_value})
+
+
+def horizontal_stripe_pattern(mode: MappingMode = "uvw", interval: Float = 0.2,
+                              thickness: Float = 0.1, stripe_color: Color = (0.0, 0.0, 0.0),
+                              bg_color: Color = (1.0, 1.0, 1.0)) -> Color:
+    """Listing 9.21."""
+    args = {"mode": _patterns.check_mapping_mode(mode),
+            "interval": _patterns.check_interval(interval), "thickness": thickness,
+            "stripe_color": stripe_color, "bg_color": bg_color}
+    return Varying(lambda s: _patterns.horizontal_stripe_pattern(s, **args),
+                   "horizontal_stripe_pattern", args)
+
+
+def checkerboard_pattern(interval: Float = 0.2, mode: MappingMode = "uvw",
+                         color_1: Color = (1.0, 1.0, 1.0),
+                         color_2: Color = (0.0, 0.0, 0.0)) -> Color:
+    """Listing 9.26."""
+    args = {"interval": _patterns.check_interval(interval),
+            "mode": _patterns.check_mapping_mode(mode), "color_1": color_1, "color_2": color_2}
+    return Varying(lambda s: _patterns.checkerboard_pattern(s, **args), "checkerboard_pattern",
+                   args)
 
 
 # --- chapter 13: tiles, bumps, textures ------------------------------------------
@@ -304,6 +350,12 @@ FUNCTIONS: dict[str, Callable[..., Any]] = {
     "uv_wave": uv_wave,
     "position": position,
     "position_to_color": position_to_color,
+    "uvw_position": uvw_position,
+    "object_position": object_position,
+    "world_position": world_position,
+    "white_above_value": white_above_value,
+    "horizontal_stripe_pattern": horizontal_stripe_pattern,
+    "checkerboard_pattern": checkerboard_pattern,
     "grid_color": grid_color,
     "fractional_uv": fractional_uv,
     "scaled_uv_circle_color": scaled_uv_circle_color,

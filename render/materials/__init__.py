@@ -23,6 +23,10 @@ Modules: :mod:`~render.materials.chapter12` (displacement mapping),
 glass, volumes, layering and mixing, plastic, fabric), in
 :mod:`~render.materials.chapter3` ... :mod:`~render.materials.chapter8`; where a name is
 used twice in the Handbook, the registry keeps one meaning (see those modules' notes).
+
+:data:`PART4` lists the example materials of chapters 9 and 10 (Part 4, defining
+functions: state functions, stripes and checkerboards, Perlin noise), in
+:mod:`~render.materials.chapter9` and :mod:`~render.materials.chapter10`.
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ from render.materials import (
     chapter6,
     chapter7,
     chapter8,
+    chapter9,
     chapter10,
     chapter12,
     chapter13,
@@ -46,7 +51,7 @@ from render.materials import (
     earlier,
 )
 
-__all__ = ["MATERIALS", "CONSTANTS", "PART5", "PARTS_2_3"]
+__all__ = ["MATERIALS", "CONSTANTS", "PART5", "PARTS_2_3", "PART4"]
 
 #: The Part 5 materials (chapters 12-15) by their Handbook names.
 PART5: tuple[str, ...] = (
@@ -140,3 +145,28 @@ CONSTANTS: MappingProxyType = MappingProxyType({
     "white": chapter6.WHITE, "blue": chapter6.BLUE, "orange": chapter6.ORANGE,
     "yellow": chapter6.YELLOW, "magenta": chapter8.MAGENTA,
 })
+
+#: The example materials of chapters 9 and 10 (Part 4) by their Handbook names.
+PART4: tuple[str, ...] = (
+    # chapter 9
+    "uv_as_color_material", "uv_as_color", "generic_diffuse_material", "tex2d_diffuse",
+    "tex2d_diffuse_scaled", "uvw_space_as_color", "space_as_color", "horizontal_stripes",
+    "horizontal_stripes_component", "red_stripes_on_yellow", "checkerboard",
+    # chapter 10
+    "perlin_noise_material", "summed_noise_material",
+)
+
+
+def _lookup_part_4(name: str) -> Callable[..., material]:
+    for module in (chapter9, chapter10):
+        if name in module.__all__:
+            return getattr(module, name)
+    raise LookupError(name)
+
+
+_PART4 = {name: _lookup_part_4(name) for name in PART4}
+_TAKEN = sorted(name for name, f in _PART4.items() if MATERIALS.get(name, f) is not f)
+if _TAKEN:
+    raise ImportError(f"Part 4 material names already registered otherwise: {_TAKEN}")
+#: Handbook name -> material function (read-only), Parts 2-5.
+MATERIALS = MappingProxyType(dict(MATERIALS) | _PART4)
