@@ -26,12 +26,13 @@ non-thin-walled surfaces.  ``color_fresnel_layer`` folds ``saturate(weight)`` in
 ``C`` per channel.  The layer's own lobe carries no Fresnel of its own
 (``specular_bsdf(scatter_reflect)``), so the node applies exactly one.
 
-Energy: a smooth (specular) coat over any base is lossless where the base is: the coat
-takes ``w F(nk1)`` and the base keeps ``1 - w max(F(nk1), F(nk2))``, which loses the
-part of the base's lobe that leaves at grazing angles (``F(nk2) > F(nk1)``).  With a
-rough coat, ``F(|wo.h|)`` over tilted half vectors can exceed ``F(nk1)``: libbsdf's
-heuristic then neither conserves nor tracks energy (measured in
-``tests/render/df/test_fresnel_layer.py``).
+Energy: the node never gains energy (the bound and how ``Ĉ`` is computed:
+:mod:`render.df._layer`).  The base's factor is libbsdf's ``1 - w max(F(nk1), F(nk2r))``
+lowered, only where needed, to ``1 - w Ĉ`` with ``Ĉ`` the coat's Fresnel-weighted albedo
+(libbsdf's rule alone gains 0.2 % with a rough coat over a mirror at 45 degrees).  A
+smooth (specular) coat keeps libbsdf's factors exactly and is lossless where the base
+is, except for the part of the base's lobe that leaves at grazing angles
+(``F(nk2) > F(nk1)``), which is lost.  Measured in ``tests/render/df/test_fresnel_layer.py``.
 """
 
 from __future__ import annotations
@@ -110,6 +111,13 @@ class FresnelLayer(CurveLayer):
 
     def _curve(self, c: Arr, eta: Rgb) -> Rgb:
         return FresnelCurve.value(c, eta)
+
+    def _curve_params(self) -> tuple:
+        return (self.ior, self.ior_outside, self.ior_inside)
+
+    def _curve_constant(self) -> bool:
+        # eta = ior / ior_outside outside, ior_outside / ior inside: F = 0 where they match
+        return bool(np.all(self.ior == np.reshape(self.ior_outside, (-1, 1))))
 
 
 class ColorFresnelLayer(FresnelLayer):

@@ -1,16 +1,25 @@
-"""df::fresnel_layer and df::color_fresnel_layer: the checklist, Fresnel by hand, IOR sides."""
+"""df::fresnel_layer and df::color_fresnel_layer: the checklist, Fresnel by hand, no gain."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from render_combiner_cases import (
     COMBINED_ALBEDO_TOL,
     JUMP_ALBEDO_TOL,
+    SWEEP_BASES,
+    SWEEP_LAYERS,
+    SWEEP_ROUGHNESS,
     CombinerCase,
+    assert_no_gain,
     check_chi2_combined,
     check_integrals_combined,
     check_no_nan_combined,
+    sweep_base,
+    sweep_furnace,
+    sweep_layer,
     two_wos,
 )
 from render_df_cases import (
@@ -90,6 +99,9 @@ CASES = [
         albedo_tol=JUMP_ALBEDO_TOL,
         quad_tol=3e-3,
     ),
+    # libbsdf's rule gained 0.2 % here (test_rough_coat_over_a_mirror_does_not_gain)
+    CombinerCase("rough-coat-over-mirror", lambda: fresnel_layer(1.5, 1.0, G(roughness_u=0.2), S()),
+                 "glossy", albedo_tol=TOL),
 ]
 CHI2 = per_wo(CASES, CHI2_WOS, only=lambda c: c.chi2_wos is not None)
 INTEGRALS = two_wos(CASES)
@@ -194,13 +206,61 @@ def test_refracted_direction_uses_the_refraction_half_vector():
     assert np.allclose(coat.eval(wo, wi), expect, rtol=1e-12)
 
 
-def test_energy_of_a_rough_coat_over_a_mirror_is_not_exactly_conserved():
-    """libbsdf's heuristic (reference §3.2): a rough Fresnel coat over a mirror.
+@pytest.mark.parametrize("theta", [40.0, 45.0])
+def test_rough_coat_over_a_mirror_does_not_gain(theta):
+    """libbsdf's rule gains here (module docstring of render.df._layer).
 
-    The coat takes F(wo.h) at tilted half vectors, the mirror base keeps 1 - F(nk1): the
-    sum exceeds 1 by a hair (measured 1.0016 ± 0.0001 for roughness 0.2 at 40 degrees,
-    ior 1.5; the glossy lobe's own masking loss hides it at other roughnesses).
+    The coat takes F(wo.h) at tilted half vectors while libbsdf's mirror base keeps
+    1 - F(nk1): measured 1.0018 ± 0.0002 at 40 degrees and 1.0021 ± 0.0002 at 45 with
+    libbsdf's factors.  The base now keeps 1 - Ĉ(wo), Ĉ the coat's Fresnel-weighted
+    albedo, so the node is lossless up to Ĉ's accuracy (1e-3) and never above 1.
     """
     coat = fresnel_layer(1.5, 1.0, G(roughness_u=0.2), S())
-    m, se = furnace(coat, direction(40.0), 400_000, seed=9)
-    assert 1.0 < m[0] - 3 * se[0] and m[0] < 1.003
+    m, se = furnace(coat, direction(theta), 200_000, seed=9)
+    assert_no_gain(m, se)
+    assert np.all(m >= 1.0 - 4 * se - 1e-3)
+    # the coat's lobe itself is libbsdf's: eval without the base is F(|wo.h|) * glossy
+    wo, wi = direction(theta)[None], direction(20.0, 150.0)[None]
+    h = (wo + wi) / np.linalg.norm(wo + wi)
+    expect = F(float(wo[0] @ h[0]), 1.5)[0] * G(roughness_u=0.2).eval(wo, wi)
+    assert np.allclose(fresnel_layer(1.5, 1.0, G(roughness_u=0.2), None).eval(wo, wi), expect,
+                       rtol=1e-12)
+
+
+def test_base_keeps_one_minus_the_coat_albedo_where_it_exceeds_fresnel():
+    # a white Lambertian coat: Ĉ(n) = ∫ F(cos(theta/2)) cos(theta) / pi > F(1), so at normal
+    # incidence (wi = wo = n) the base keeps 1 - w Ĉ(n) instead of libbsdf's 1 - w F(1);
+    # Ĉ(n) by a 64-point Gauss-Legendre rule in theta (the integrand is smooth); the
+    # node's tabulated Ĉ is accurate to 1e-3 (render.df._layer.CURVE_ALBEDO_POINTS)
+    x, wq = np.polynomial.legendre.leggauss(64)
+    t = 0.25 * np.pi * (x + 1.0)
+    c_hat = np.sum(0.25 * np.pi * wq * F(np.cos(t / 2), 1.5) * 2 * np.cos(t) * np.sin(t))
+    assert 0.0411 < c_hat < 0.0412 and F(1.0, 1.5)[0] == pytest.approx(0.04)
+    base = G(roughness_u=0.3)
+    node = fresnel_layer(1.5, 0.8, D(), base)
+    n = direction(0.0)[None]
+    # the coat's term at wi = wo: F(1) / pi
+    kept = (node.eval(n, n) - 0.8 * 0.04 / np.pi) / base.eval(n, n)
+    assert np.all(np.abs(kept - (1.0 - 0.8 * c_hat)) <= 0.8 * 1e-3)
+    assert np.all(kept < 1.0 - 0.8 * 0.0405)  # below libbsdf's 1 - w F(1)
+
+
+FRESNEL_SWEEP = dict(
+    weight=st.floats(0.0, 1.0),
+    ior=st.sampled_from([0.7, 1.01, 1.33, 1.5, 2.5, 10.0]) | st.floats(0.5, 4.0),
+    roughness=st.sampled_from(SWEEP_ROUGHNESS),
+    layer=st.sampled_from(SWEEP_LAYERS),
+    base=st.sampled_from(SWEEP_BASES),
+    base_roughness=st.sampled_from(SWEEP_ROUGHNESS[:4]),
+    theta=st.sampled_from([0.0, 89.9, 120.0]) | st.floats(0.0, 89.9),
+)
+
+
+@settings(max_examples=12, deadline=None, derandomize=True)
+@given(**FRESNEL_SWEEP)
+def test_no_gain_sweep(weight, ior, roughness, layer, base, base_roughness, theta):
+    """White furnace <= 1 for rough, nested and factored coats over mirror,
+    glossy, diffuse, transmitting and layered bases, seen from both sides."""
+    coat = fresnel_layer(ior, weight, sweep_layer(layer, roughness),
+                         sweep_base(base, base_roughness), ior_inside=1.5)
+    sweep_furnace(coat, theta)
