@@ -8,8 +8,13 @@ glossy objects.  For each it measures
 
 * samples per second of both renderers (ours with 2 threads; Mitsuba's LLVM backend
   uses both cores too), from a timed render after a warm-up (Mitsuba's JIT compile and
-  our BVH build are excluded);
-* the share of our render time spent inside Embree (``scene.run``);
+  our BVH build are excluded).  Mitsuba renders the very triangles we trace (our
+  tessellation, vertex normals included), and, for scale, its analytic sphere and
+  rectangles;
+* the share of our render time spent inside Embree (``scene.run``), and the **Embree
+  ceiling**: every ray of our timed render recorded and traced again through embreex
+  alone, on two threads, with no shading at all: the samples per second no tracer
+  built on embreex can pass with this many rays per sample;
 * equal-time error: both render for the same wall time, and their RMSE against a
   converged Mitsuba reference (``--ref-spp``) is compared.
 
@@ -21,7 +26,9 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so")
@@ -177,6 +184,60 @@ def mitsuba_render(mi, scene, spp, seed):
     return img, time.perf_counter() - t0
 
 
+def same_triangles(mi, md, geometry, names):
+    """``md`` with every shape replaced by a Mitsuba mesh of our triangles (positions and
+    vertex normals of ``geometry``, object ``k`` being ``names[k]``)."""
+    out = dict(md)
+    for k, name in enumerate(names):
+        faces = geometry.faces[geometry.face_offset[k] : geometry.face_offset[k + 1]]
+        used, local = np.unique(faces, return_inverse=True)
+        props = mi.Properties()
+        for key in ("bsdf", "emitter"):
+            if key in md[name]:
+                props[key] = mi.load_dict(md[name][key])
+        mesh = mi.Mesh(name, len(used), len(faces), props, has_vertex_normals=True)
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = mi.Float(geometry.vertices[used].astype(np.float32).ravel())
+        params["vertex_normals"] = mi.Float(geometry.normals[used].astype(np.float32).ravel())
+        params["faces"] = mi.UInt32(local.astype(np.uint32).ravel())
+        params.update()
+        out[name] = mesh
+    return out
+
+
+THREADS = 2
+
+
+class RayLog:
+    """Records every ``scene.run`` call of an Embree scene, to trace them again alone."""
+
+    def __init__(self, embree):
+        self.embree = embree
+        self.calls = []
+        self._lock = threading.Lock()
+
+    def run(self, origins, directions, **kw):
+        with self._lock:
+            self.calls.append((origins.copy(), directions.copy(), kw))
+        return self.embree.run(origins, directions, **kw)
+
+    @property
+    def rays(self) -> int:
+        return sum(len(c[0]) for c in self.calls)
+
+    def replay(self, threads: int = 2) -> float:
+        """Seconds to trace the recorded calls again, spread over ``threads`` threads."""
+
+        def trace(calls):
+            for o, d, kw in calls:
+                self.embree.run(o, d, **kw)
+
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(threads) as pool:
+            list(pool.map(trace, [self.calls[i::threads] for i in range(threads)]))
+        return time.perf_counter() - t0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
@@ -192,81 +253,82 @@ def main(argv=None) -> int:
 
     mi.set_variant("llvm_ad_rgb")
     w, h = args.size
+    pixels = w * h
     rows = []
     for kind in ("diffuse", "glossy"):
         ours, md, cam = stage(kind, w, h)
-        integ = Integrator(ours, ours.build())
-        misc = mitsuba_scene(mi, md, cam)
-        mitsuba_render(mi, misc, 4, 0)  # JIT warm-up
+        geometry = ours.build()
+        integ = Integrator(ours, geometry)
+        names = [obj.name for obj in ours.objects]
+        mi_tri = mitsuba_scene(mi, same_triangles(mi, md, geometry, names), cam)
+        mi_analytic = mitsuba_scene(mi, md, cam)
+        for sc in (mi_tri, mi_analytic):
+            mitsuba_render(mi, sc, 4, 0)  # JIT warm-up
         integ.render(spp=1, progress=False)  # warm-up
-        film = integ.render(spp=args.spp, progress=False)
+        log = RayLog(geometry.embree)
+        geometry.embree = log
+        film = integ.render(spp=args.spp, progress=False, threads=THREADS)
+        geometry.embree = log.embree
         ours_rate = film.stats["samples_per_s"]
-        embree_share = film.stats["embree_time_s"] / film.stats["time_s"]
+        ceiling = pixels * args.spp / log.replay(THREADS)
+        rays_per_sample = log.rays / (pixels * args.spp)
+        del log
+        embree_share = film.stats["embree_time_s"] / (THREADS * film.stats["time_s"])
         mi_spp = max(4, args.spp * 4)
-        _, t_mi = mitsuba_render(mi, misc, mi_spp, 1)
-        mi_rate = w * h * mi_spp / t_mi
-        ref, _ = mitsuba_render(mi, misc, args.ref_spp, 2)
+        mi_rate = pixels * mi_spp / mitsuba_render(mi, mi_tri, mi_spp, 1)[1]
+        mi_analytic_rate = pixels * mi_spp / mitsuba_render(mi, mi_analytic, mi_spp, 1)[1]
+        ref, _ = mitsuba_render(mi, mi_tri, args.ref_spp, 2)
         # equal time: each renders for the same budget
-        eq_ours = integ.render(time_budget=args.seconds, seed=3, progress=False)
-        spp_mi_eq = max(1, int(round(mi_rate * args.seconds / (w * h))))
-        eq_mi, t_eq_mi = mitsuba_render(mi, misc, spp_mi_eq, 4)
-        rmse_ours = float(np.sqrt(np.mean((eq_ours.rgb() - ref) ** 2)))
-        rmse_mi = float(np.sqrt(np.mean((eq_mi - ref) ** 2)))
-        bias = float((eq_ours.rgb().mean() - ref.mean()) / ref.mean())
+        eq_ours = integ.render(time_budget=args.seconds, seed=3, progress=False, threads=THREADS)
+        spp_mi_eq = max(1, int(round(mi_rate * args.seconds / pixels)))
+        eq_mi, t_eq_mi = mitsuba_render(mi, mi_tri, spp_mi_eq, 4)
+        ours_rgb = eq_ours.rgb()
         rows.append(
             (
                 kind,
-                ours_rate,
-                mi_rate,
-                embree_share,
-                eq_ours.stats["spp"],
-                eq_ours.stats["time_s"],
-                rmse_ours,
-                spp_mi_eq,
-                t_eq_mi,
-                rmse_mi,
-                bias,
+                f"{rays_per_sample:.2f}",
+                f"{ours_rate / 1e6:.3f}",
+                f"{ceiling / 1e6:.2f}",
+                f"{mi_rate / 1e6:.2f}",
+                f"{mi_analytic_rate / 1e6:.2f}",
+                f"{ours_rate / mi_rate:.3f}",
+                f"{ceiling / mi_rate:.2f}",
+                f"{embree_share:.0%}",
+                f"{eq_ours.stats['spp']} ({eq_ours.stats['time_s']:.1f})",
+                f"{np.sqrt(np.mean((ours_rgb - ref) ** 2)):.4f}",
+                f"{spp_mi_eq} ({t_eq_mi:.1f})",
+                f"{np.sqrt(np.mean((eq_mi - ref) ** 2)):.4f}",
+                f"{(ours_rgb.mean() - ref.mean()) / ref.mean():+.2%}",
             )
         )
     head = (
         "scene",
+        "rays/sample",
         "ours Msamples/s",
-        "Mitsuba Msamples/s",
-        "ratio",
-        "in Embree",
+        "Embree ceiling",
+        "Mitsuba, same triangles",
+        "Mitsuba, analytic shapes",
+        "ours / Mitsuba",
+        "ceiling / Mitsuba",
+        "thread time in Embree",
         "equal time: ours spp (s)",
         "ours RMSE",
         "Mitsuba spp (s)",
         "Mitsuba RMSE",
-        "mean vs ref",
+        "our mean vs reference",
     )
-    lines = []
-    for r in rows:
-        lines.append(
-            (
-                r[0],
-                f"{r[1] / 1e6:.3f}",
-                f"{r[2] / 1e6:.3f}",
-                f"{r[1] / r[2]:.3f}",
-                f"{r[3]:.0%}",
-                f"{r[4]} ({r[5]:.1f})",
-                f"{r[6]:.4f}",
-                f"{r[7]} ({r[8]:.1f})",
-                f"{r[9]:.4f}",
-                f"{r[10]:+.2%}",
-            )
-        )
     print(
-        f"# {w}x{h}, Mitsuba reference {args.ref_spp} spp, equal time {args.seconds} s, max depth 8"
+        f"# {w}x{h}, max depth 8, {THREADS} threads; Msamples/s; Mitsuba reference "
+        f"{args.ref_spp} spp on the same triangles; equal time {args.seconds} s"
     )
     if args.markdown:
         print("| " + " | ".join(head) + " |")
         print("|" + "---|" * len(head))
-        for ln in lines:
-            print("| " + " | ".join(ln) + " |")
+        for r in rows:
+            print("| " + " | ".join(r) + " |")
     else:
-        for ln in lines:
-            print(", ".join(f"{k}: {v}" for k, v in zip(head, ln, strict=True)))
+        for r in rows:
+            print(", ".join(f"{k}: {v}" for k, v in zip(head, r, strict=True)))
     return 0
 
 
