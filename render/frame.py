@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from render._typing import Arr, ArrayLike, Vec3
-from render.numerics import TOL, dot, safe_div, safe_sqrt, unitize
+from render.numerics import TOL, cross, dot, norm, safe_div, safe_sqrt, unitize
 
 __all__ = [
     "Frame",
@@ -106,14 +106,13 @@ class Frame:
         n = np.asarray(n, dtype=np.float64)
         tu = np.asarray(tangent_u, dtype=np.float64)
         tu = np.broadcast_to(tu, n.shape)
-        s, ok = unitize(tu - dot(tu, n)[:, None] * n)
+        proj = tu - dot(tu, n)[:, None] * n
+        s, ok = unitize(proj)
         # reject tangents whose projection is mostly rounding noise
-        norm_tu = np.linalg.norm(tu, axis=1)
-        ok &= np.linalg.norm(tu - dot(tu, n)[:, None] * n, axis=1) > 1e-8 * norm_tu
-        fallback = cls.from_normal(n)
-        s = np.where(ok[:, None], s, fallback.s)
-        t = np.cross(n, s)
-        return cls(s, t, n)
+        ok &= norm(proj) > 1e-8 * norm(tu)
+        if not np.all(ok):
+            s = np.where(ok[:, None], s, cls.from_normal(n).s)
+        return cls(s, cross(n, s), n)
 
     def to_local(self, v: ArrayLike) -> Vec3:
         """World rows ``v`` (n, 3) expressed in this frame."""

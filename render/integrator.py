@@ -62,11 +62,12 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.camera import primary_rays
+from render.compiled import CompiledTrace, compiled_reason
 from render.df import albedo_estimate
 from render.film import Film
 from render.frame import Frame, mirror_z
 from render.lights import INFINITE_DISTANCE, AreaLight, LightSet
-from render.numerics import ONE_MINUS_EPS, dot, unitize
+from render.numerics import ONE_MINUS_EPS, dot, norm, row_any, row_max, unitize
 from render.volume import MAX_NESTING, MediumStack, is_closed, medium_of
 
 __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
@@ -87,7 +88,7 @@ STRAIGHT_TOL = 1e-9
 def _fast_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit rows of interpolated attribute vectors (bounded, finite): ``(u, valid)``;
     rows shorter than 1e-150 give 0 and ``valid = False``."""
-    length = np.sqrt(np.einsum("ij,ij->i", v, v))
+    length = np.sqrt(dot(v, v))
     ok = length > 1e-150
     return v / np.where(ok, length, 1.0)[:, None], ok
 
@@ -162,7 +163,11 @@ class _Paths:
 
     def take(self, index: np.ndarray) -> _Paths:
         """The lanes ``index`` (a bool mask or indices), copied."""
-        kw = {name: getattr(self, name)[index] for name in self.FIELDS}
+        index = np.asarray(index)
+        if index.dtype == bool:
+            index = np.flatnonzero(index)
+        # np.take with indices: faster than boolean or fancy indexing
+        kw = {name: getattr(self, name).take(index, axis=0) for name in self.FIELDS}
         return _Paths(stack=self.stack.take(index), **kw)
 
     @staticmethod
@@ -220,9 +225,13 @@ class Integrator:
         ``scene.build()``.
     aovs : iterable of str
         AOVs for the film (:data:`render.film.AOVS`).
+    path : {"auto", "general", "compiled"}
+        ``"auto"`` traces with the compiled kernels of :mod:`render.compiled` where the
+        scene allows it (same image, several times faster) and with the general numpy
+        path elsewhere; ``"compiled"`` raises ValueError where the scene does not allow it.
     """
 
-    def __init__(self, scene, geometry, aovs=()):
+    def __init__(self, scene, geometry, aovs=(), path: str = "auto"):
         self.scene = scene
         self.geo = geometry
         self.camera = scene.camera
@@ -282,6 +291,13 @@ class Integrator:
         self.rigid_identity = np.array([np.array_equal(o.linear, np.eye(3)) for o in self.objects])
         self.embree_time = 0.0
         self.rays = 0
+        if path not in ("auto", "general", "compiled"):
+            raise ValueError(f"path must be 'auto', 'general' or 'compiled', got {path!r}")
+        #: why the general path traces this scene (None: the compiled one does)
+        self.general_reason = "asked for" if path == "general" else compiled_reason(self)
+        if path == "compiled" and self.general_reason is not None:
+            raise ValueError(f"the compiled path cannot render this scene: {self.general_reason}")
+        self.compiled = CompiledTrace(self) if self.general_reason is None else None
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
@@ -324,7 +340,11 @@ class Integrator:
         if ior_outside is not None and bsdf is not None and np.any(ior_outside != 1.0):
             bsdf = self._rebind(k, sh, front, np.asarray(ior_outside, dtype=np.float64))
         shade_ior = getattr(sh, "ior", None)
-        ior = None if shade_ior is None else np.asarray(shade_ior, dtype=np.float64).mean(axis=1)
+        ior = None
+        if shade_ior is not None:
+            # the mean of the RGB IORs (as .mean(axis=1), without the slow short-axis reduction)
+            ior3 = np.asarray(shade_ior, dtype=np.float64)
+            ior = (ior3[:, 0] + ior3[:, 1] + ior3[:, 2]) / 3.0
         nrm = getattr(sh, "normal", None)
         if nrm is None:
             normal_world = None
@@ -633,7 +653,7 @@ class Integrator:
                         if sh.ior is not None:
                             cross_ior[ss] = sh.ior
                     factor[ss] = np.where(cut[:, None], 1.0, f)
-            passes = np.any(factor > 0.0, axis=1)
+            passes = row_any(factor > 0.0)
             T[live] *= factor
             enc = crossing & self.encloses[objs]
             if np.any(enc):
@@ -823,7 +843,7 @@ class Integrator:
             new_pdf[sel] = s.pdf
             new_w[sel] = s.weight
             ok_s[sel] = s.valid
-        q = np.flatnonzero(np.any(nee_c > 0, axis=1))
+        q = np.flatnonzero(row_any(nee_c > 0))
         if len(q):
             finite = ldist[q] < INFINITE_DISTANCE
             far = np.where(finite, ldist[q] * (1.0 - 1e-6) - self.eps, ldist[q])
@@ -831,11 +851,11 @@ class Integrator:
             L[P.ids[q]] += nee_c[q] * T
         beta = P.beta * new_w
         rr = P.depth >= self.settings.rr_depth
-        qrr = np.minimum((beta / self._mis_norm_col(P.r)).max(axis=1), 0.95)
+        qrr = np.minimum(row_max(beta / self._mis_norm_col(P.r)), 0.95)
         survive = ~rr | (u_rr < qrr)
         scale = np.where(rr, np.maximum(qrr, 1e-300), 1.0)
         beta = np.where(rr[:, None], beta / scale[:, None], beta)
-        go = live & ok_s & survive & np.any(beta > 0, axis=1)
+        go = live & ok_s & survive & row_any(beta > 0)
         out = P.take(go)
         out.o = p[go]
         out.d = new_d[go]
@@ -879,6 +899,8 @@ class Integrator:
         # distance from the last scattering vertex (emitter pdfs are measured from it)
         dist_v = P.seg + t
 
+        # spectral-MIS normalisation (1 without media)
+        mis = self._mis_norm(P.r)
         # light samples for every lane (one light each)
         front_all = dot(wo_world, ng) > 0
         groups = []
@@ -910,13 +932,15 @@ class Integrator:
             opaque = ~passes[sel]
             nw = sh.normal_world if sh.normal_world is not None else ns
             frame = self._frame(k, sh, ns, tu)
-            wo = frame.to_local(wo_world[sel])
-            g_wo = dot(wo_world[sel], ng[sel])
+            wo_w, ng_s = wo_world[sel], ng[sel]
+            mis_s = mis[sel] if self.media else mis
+            wo = frame.to_local(wo_w)
+            g_wo = dot(wo_w, ng_s)
             if sh.ior is not None:
                 entry_ior[sel] = sh.ior
             # emission, weighted against light sampling
             if sh.edf is not None:
-                le = self._emitted(k, sh, frame, wo_world[sel], front_all[sel])
+                le = self._emitted(k, sh, frame, wo_w, front_all[sel])
                 cos_l = np.abs(g_wo)
                 pl = np.where(
                     cos_l > 0,
@@ -924,7 +948,7 @@ class Integrator:
                     0.0,
                 )
                 w = np.where(P.prev_delta[sel], 1.0, _power(P.prev_pdf[sel], pl))
-                w = w / self._mis_norm(P.r[sel])
+                w = w / mis_s
                 L[ids[sel]] += np.where(opaque[:, None], beta[sel] * le * w[:, None], 0.0)
             # first opaque hit: alpha and AOVs
             fo = P.first[sel] & opaque
@@ -948,22 +972,23 @@ class Integrator:
             if bsdf is None or not np.any(trial):
                 continue
             # next-event estimation
-            wl = frame.to_local(lw[sel])
+            lw_s, lpdf_s = lw[sel], lpdf[sel]
+            wl = frame.to_local(lw_s)
             f, pb = bsdf.eval_pdf(wo, wl)
-            g_wi = dot(lw[sel], ng[sel])
+            g_wi = dot(lw_s, ng_s)
             consistent = (g_wi * g_wo > 0) == (wl[:, 2] * wo[:, 2] > 0)
-            w = np.where(ldelta[sel], 1.0, _power(lpdf[sel], pb)) / self._mis_norm(P.r[sel])
-            ok = live & (lpdf[sel] > 0) & consistent & (g_wi != 0)
-            contrib = beta[sel] * f * lli[sel] * (w / np.where(ok, lpdf[sel], 1.0))[:, None]
-            ok &= np.any(contrib > 0, axis=1)
+            w = np.where(ldelta[sel], 1.0, _power(lpdf_s, pb)) / mis_s
+            ok = live & (lpdf_s > 0) & consistent & (g_wi != 0)
+            contrib = beta[sel] * f * lli[sel] * (w / np.where(ok, lpdf_s, 1.0))[:, None]
+            ok &= row_any(contrib > 0)
             nee_c[sel] = np.where(ok[:, None], contrib, 0.0)
             nee_ok[sel] = ok
             # continue the path with the BSDF's sample
             s = bsdf.sample(wo, u_bsdf[sel, 0], u_bsdf[sel, 1:])
             wi_world = frame.to_world(s.wi)
-            g_new = dot(wi_world, ng[sel])
+            g_new = dot(wi_world, ng_s)
             consistent = (g_new * g_wo > 0) == (s.wi[:, 2] * wo[:, 2] > 0)
-            sc = trial & s.valid & consistent & (g_new != 0) & np.any(s.weight > 0, axis=1)
+            sc = trial & s.valid & consistent & (g_new != 0) & row_any(s.weight > 0)
             new_d[sel] = wi_world
             new_w[sel] = s.weight
             new_pdf[sel] = s.pdf
@@ -980,28 +1005,30 @@ class Integrator:
         # shadow rays
         if np.any(nee_ok):
             q = np.flatnonzero(nee_ok)
-            org = self._offset(p_all[q], ng[q], lw[q])
+            pq, ngq, lwq, ldq = p_all[q], ng[q], lw[q], ldist[q]
+            org = self._offset(pq, ngq, lwq)
             # aim from the offset origin at the light point itself (lights at a
             # finite distance), and stop short of it
-            finite = ldist[q] < INFINITE_DISTANCE
-            target = p_all[q] + lw[q] * np.where(finite, ldist[q], 0.0)[:, None]
+            finite = ldq < INFINITE_DISTANCE
+            target = pq + lwq * np.where(finite, ldq, 0.0)[:, None]
             sd, sok = unitize(target - org)
-            sdir = np.where((finite & sok)[:, None], sd, lw[q])
-            sdist = np.where(finite, np.linalg.norm(target - org, axis=1), ldist[q])
+            sdir = np.where((finite & sok)[:, None], sd, lwq)
+            sdist = np.where(finite, norm(target - org), ldq)
             far = sdist * (1.0 - 1e-6) - self.eps
             stack = P.stack.take(q)
             # a shadow ray on the transmitted side starts inside (or outside) the object
-            cross = (dot(lw[q], ng[q]) * dot(wo_world[q], ng[q]) < 0) & self.encloses[objs[q]]
-            if np.any(cross):
-                stack.push(cross & front_all[q], objs[q], entry_ior[q])
-                stack.pop(cross & ~front_all[q], objs[q])
+            if np.any(self.encloses[objs[q]]):
+                cross = (dot(lwq, ngq) * dot(wo_world[q], ngq) < 0) & self.encloses[objs[q]]
+                if np.any(cross):
+                    stack.push(cross & front_all[q], objs[q], entry_ior[q])
+                    stack.pop(cross & ~front_all[q], objs[q])
             # the true segment starts at the surface point: for a light at a finite
             # distance the aim was moved to the offset origin, for one at infinity the
             # ray was shifted parallel to itself
             lead = np.where(
                 finite,
-                np.linalg.norm(target - p_all[q], axis=1) - sdist,
-                self._parallel_shift(ng[q], sdir),
+                norm(target - pq) - sdist,
+                self._parallel_shift(ngq, sdir),
             )
             T = self._shadow(org, sdir, far, stack, rng, lead=lead, tail=sdist - far)
             L[ids[q]] += nee_c[q] * T
@@ -1013,7 +1040,7 @@ class Integrator:
         beta = np.where(scatter[:, None], beta * new_w, beta)
         # Russian roulette (at real vertices only)
         rr = scatter & ~null_pass & (depth >= self.settings.rr_depth)
-        qrr = np.minimum((beta / self._mis_norm_col(P.r)).max(axis=1), 0.95)
+        qrr = np.minimum(row_max(beta / self._mis_norm_col(P.r)), 0.95)
         survive = ~rr | (u_rr < qrr)
         beta = np.where(
             (rr & survive)[:, None],
@@ -1028,23 +1055,22 @@ class Integrator:
             if np.any(cross):
                 P.stack.push(cross & front_all, objs, entry_ior)
                 P.stack.pop(cross & ~front_all, objs)
-        out = _Paths(
-            ids=ids[go],
-            o=self._offset(p_all, ng, nd)[go],
-            d=nd[go],
-            beta=beta[go],
-            depth=np.where(straight, depth, depth + 1)[go],
-            prev_pdf=np.where(straight, P.prev_pdf, new_pdf)[go],
-            prev_delta=np.where(straight, P.prev_delta, new_delta)[go],
-            first=first[go],
-            crossings=crossings[go],
-            seg=np.where(straight, dist_v, 0.0)[go],
-            shift=self._parallel_shift(ng, nd)[go],
-            hero=P.hero[go],
-            r=P.r[go],
-            stack=P.stack.take(go),
-        )
-        return out
+        return _Paths(
+            ids=ids,
+            o=self._offset(p_all, ng, nd),
+            d=nd,
+            beta=beta,
+            depth=np.where(straight, depth, depth + 1),
+            prev_pdf=np.where(straight, P.prev_pdf, new_pdf),
+            prev_delta=np.where(straight, P.prev_delta, new_delta),
+            first=first,
+            crossings=crossings,
+            seg=np.where(straight, dist_v, 0.0),
+            shift=self._parallel_shift(ng, nd),
+            hero=P.hero,
+            r=P.r,
+            stack=P.stack,
+        ).take(go)
 
     # -------------------------------------------------------------- the image
     def render(
@@ -1092,13 +1118,15 @@ class Integrator:
         self.embree_time = 0.0
         self.rays = 0
 
+        trace = self.trace if self.compiled is None else self.compiled.trace
+
         def work(args):
             pass_index, k_spp, (a, b) = args
             rng = np.random.Generator(
                 np.random.PCG64(np.random.SeedSequence([seed, pass_index, a]))
             )
             pixel = np.arange(a, b, dtype=np.int64) // k_spp
-            return pixel, self.trace(pixel, rng)
+            return pixel, trace(pixel, rng)
 
         pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
         done = 0
@@ -1133,6 +1161,8 @@ class Integrator:
             embree_time_s=self.embree_time,
             samples_per_s=npix * done / elapsed if elapsed > 0 else 0.0,
             triangles=self.geo.triangle_count,
+            path="general" if self.compiled is None else "compiled",
+            general_reason=self.general_reason,
         )
         return film
 
@@ -1180,6 +1210,7 @@ def render(
     progress: bool = True,
     threads: int = 2,
     denoise: bool = False,
+    path: str = "auto",
 ) -> Film:
     """Render a scene (a :class:`~render.scene.Scene` or a TOML file path) to a film.
 
@@ -1194,6 +1225,8 @@ def render(
     threads : int
     denoise : bool
         Denoise the colour with Open Image Denoise (``pyoidn``) afterwards.
+    path : {"auto", "general", "compiled"}
+        Which implementation traces (:class:`Integrator`).
 
     Returns
     -------
@@ -1210,7 +1243,7 @@ def render(
     aov_list = list(aovs)
     if denoise:
         aov_list = list(dict.fromkeys(aov_list + ["albedo", "normal"]))
-    integ = Integrator(scene, geometry, aov_list)
+    integ = Integrator(scene, geometry, aov_list, path=path)
     film = integ.render(spp=spp, time_budget=time, seed=seed, progress=progress, threads=threads)
     film.stats["build_s"] = build_s
     film.stats["geometry"] = geometry.stats

@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from render.numerics import dot, safe_sqrt, unitize
+from render.numerics import dot, norm, safe_sqrt, unitize
 from render.warp import square_to_uniform_sphere
 
 __all__ = [
@@ -450,13 +450,14 @@ class AreaLight(Light):
         b1 = 1.0 - su
         b2 = u[:, 1] * su
         bary = np.stack([1.0 - b1 - b2, b1, b2], axis=1)
-        pos = np.einsum("ij,ijk->ik", bary, self.corners[k])
+        c = self.corners[k]  # summed in einsum's order, without its overhead
+        pos = bary[:, 0:1] * c[:, 0] + bary[:, 1:2] * c[:, 1] + bary[:, 2:3] * c[:, 2]
         return k, bary, pos
 
     def sample_li(self, p, u):
         k, bary, x = self.sample_points(u)
         d = x - p
-        dist = np.linalg.norm(d, axis=1)
+        dist = norm(d)
         wi, ok = unitize(d)
         nrm = self.normals[k]
         cos_l = np.abs(dot(wi, nrm))

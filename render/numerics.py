@@ -28,6 +28,10 @@ __all__ = [
     "safe_div",
     "saturate",
     "dot",
+    "norm",
+    "cross",
+    "row_max",
+    "row_any",
     "unitize",
     "luminance",
     "reflect",
@@ -180,7 +184,64 @@ def dot(a: Vec3, b: Vec3) -> Arr:
     >>> dot(np.array([[1.0, 2.0, 3.0]]), np.array([[0.0, 1.0, 1.0]])).tolist()
     [5.0]
     """
-    return np.einsum("...i,...i->...", a, b)
+    a = np.asarray(a)
+    b = np.asarray(b)
+    # column products summed in einsum's order (x + z) + y: same bits, about twice as fast
+    return a[..., 0] * b[..., 0] + a[..., 2] * b[..., 2] + a[..., 1] * b[..., 1]
+
+
+def norm(v: Vec3) -> Arr:
+    """Row-wise Euclidean length of (n, 3) rows -> (n,) (``np.linalg.norm(v, axis=-1)``,
+    same bits, without the generic reduction).
+
+    Examples
+    --------
+    >>> norm(np.array([[3.0, 0.0, 4.0], [0.0, 0.0, 0.0]])).tolist()
+    [5.0, 0.0]
+    """
+    v = np.asarray(v)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.sqrt(x * x + y * y + z * z)
+
+
+def cross(a: Vec3, b: Vec3) -> Vec3:
+    """Row-wise cross product of (n, 3) arrays (``np.cross``, same bits, faster).
+
+    Examples
+    --------
+    >>> cross(np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]])).tolist()
+    [[0.0, 0.0, 1.0]]
+    """
+    a = np.asarray(a)
+    b = np.asarray(b)
+    ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
+    bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], axis=-1)
+
+
+def row_max(a: Vec3) -> Arr:
+    """Largest entry of each (n, 3) row (``a.max(axis=-1)``; a reduction over a short
+    axis is several times slower).
+
+    Examples
+    --------
+    >>> row_max(np.array([[1.0, 3.0, 2.0], [-1.0, -2.0, -3.0]])).tolist()
+    [3.0, -1.0]
+    """
+    a = np.asarray(a)
+    return np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2])
+
+
+def row_any(b: np.ndarray) -> np.ndarray:
+    """Whether any entry of each (n, 3) bool row is set (``b.any(axis=-1)``, faster).
+
+    Examples
+    --------
+    >>> row_any(np.array([[False, False, True], [False, False, False]])).tolist()
+    [True, False]
+    """
+    b = np.asarray(b)
+    return b[..., 0] | b[..., 1] | b[..., 2]
 
 
 def unitize(v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -204,13 +265,13 @@ def unitize(v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """
     v = np.asarray(v, dtype=np.float64)
     # scale first so the squared length neither overflows nor underflows
-    scale = np.max(np.abs(v), axis=-1, keepdims=True)
-    valid = scale[..., 0] > TOL.unit_min
-    s = np.where(scale > TOL.unit_min, scale, 1.0)
-    w = v / s
-    length = np.sqrt(np.einsum("...i,...i->...", w, w))[..., None]
-    u = np.where(valid[..., None], w / np.where(valid[..., None], length, 1.0), 0.0)
-    return u, valid
+    scale = row_max(np.abs(v))
+    valid = scale > TOL.unit_min
+    w = v / np.where(valid, scale, 1.0)[..., None]
+    length = np.sqrt(dot(w, w))[..., None]
+    if np.all(valid):
+        return w / length, valid
+    return np.where(valid[..., None], w / np.where(valid[..., None], length, 1.0), 0.0), valid
 
 
 def luminance(c: ArrayLike) -> np.ndarray:

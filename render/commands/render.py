@@ -59,6 +59,13 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-depth", type=int, metavar="N", help="longest path (-1: unlimited)")
     p.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"), help="image size")
     p.add_argument("--threads", type=int, default=2, metavar="N", help="worker threads (default 2)")
+    p.add_argument(
+        "--path",
+        choices=("auto", "general", "compiled"),
+        default="auto",
+        help="auto (default): the compiled kernels where the scene allows them (same image), "
+        "else the general numpy path; compiled fails where the scene does not allow them",
+    )
     p.add_argument("--half", action="store_true", help="write 16-bit half floats")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
@@ -110,7 +117,12 @@ def run(args) -> int:
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
         film = render(
-            scene, aovs=aovs, progress=not args.quiet, threads=args.threads, denoise=args.denoise
+            scene,
+            aovs=aovs,
+            progress=not args.quiet,
+            threads=args.threads,
+            denoise=args.denoise,
+            path=args.path,
         )
     except SceneError as e:
         print(str(e), file=sys.stderr)
@@ -127,12 +139,13 @@ def run(args) -> int:
         return _error(f"cannot write the output: {e.strerror or e}", EXIT_IO)
     if not args.quiet:
         st = film.stats
-        share = st["embree_time_s"] / st["time_s"] if st["time_s"] else 0.0
+        share = st["embree_time_s"] / (args.threads * st["time_s"]) if st["time_s"] else 0.0
+        path = st["path"] if st["path"] == "compiled" else f"general: {st['general_reason']}"
         print(
             f"{Path(args.output)}: {film.width}x{film.height}, {st['spp']} spp in "
             f"{st['time_s']:.2f} s "
-            f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {share:.0%} in Embree, "
-            f"{st['triangles']} triangles)",
+            f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {share:.0%} of thread time in "
+            f"Embree, {st['triangles']} triangles; {path} path)",
             file=sys.stderr,
         )
     return EXIT_OK

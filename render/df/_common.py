@@ -8,7 +8,7 @@ import numpy as np
 
 from render._typing import Arr, Vec3
 from render.frame import mirror_z
-from render.numerics import TOL
+from render.numerics import TOL, norm
 
 __all__ = ["orient", "tangent_axes", "ior_pair", "INV_PI", "ScatterMode", "lane_ior"]
 
@@ -26,6 +26,8 @@ def orient(wo: Vec3, *others: Vec3) -> tuple:
         The oriented directions; afterwards ``wo.z >= 0`` on every lane.
     """
     flip = wo[:, 2] < 0.0
+    if not np.any(flip):
+        return (flip, wo, *others)
     return (flip, mirror_z(wo, flip), *(mirror_z(w, flip) for w in others))
 
 
@@ -51,8 +53,8 @@ def tangent_axes(tangent_u: np.ndarray, n: int) -> tuple[Arr, Arr, np.ndarray]:
     t = np.broadcast_to(tangent_u, (n, 3))
     tx, ty = t[:, 0], t[:, 1]
     length = np.hypot(tx, ty)
-    norm = np.linalg.norm(t, axis=1)
-    valid = length > 1e-8 * np.maximum(norm, TOL.unit_min)
+    full = norm(t)
+    valid = length > 1e-8 * np.maximum(full, TOL.unit_min)
     safe = np.where(valid, length, 1.0)
     return np.where(valid, tx / safe, 1.0), np.where(valid, ty / safe, 0.0), valid
 

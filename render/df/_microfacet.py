@@ -56,6 +56,7 @@ from render.numerics import (
     check_finite,
     dot,
     fresnel_dielectric,
+    row_max,
     saturate,
     unitize,
 )
@@ -168,13 +169,19 @@ class MicrofacetBsdf(Bsdf):
             ok &= ~tr
         # half vector: reflection, thin-walled transmission (mirror wi up), refraction
         k2r = mirror_z(wi, tr)
-        h_refl, v1 = unitize(wo + k2r)
-        h_refr, v2 = unitize(eta1[:, None] * wo + eta2[:, None] * wi)
-        h_refr = h_refr * np.sign(eta1 - eta2)[:, None]
-        h = np.where(refr[:, None], h_refr, h_refl)
-        ok &= np.where(refr, v2, v1)
+        h, valid = unitize(wo + k2r)
+        if np.any(refr & ok):
+            h_refr, v2 = unitize(eta1[:, None] * wo + eta2[:, None] * wi)
+            h_refr = h_refr * np.sign(eta1 - eta2)[:, None]
+            h = np.where(refr[:, None], h_refr, h)
+            valid = np.where(refr, v2, valid)
+            kh2 = np.where(refr, dot(wi, h), dot(k2r, h))
+        else:
+            # no lane refracts (refracting lanes that are already invalid are zeroed below)
+            refr = np.zeros_like(refr)
+            kh2 = dot(k2r, h)
+        ok &= valid
         kh1 = dot(wo, h)
-        kh2 = np.where(refr, dot(wi, h), dot(k2r, h))
         ok &= (h[:, 2] > TOL.cos_zero) & (kh1 > 0.0) & np.where(refr, kh2 < 0.0, kh2 > 0.0)
         p_refl = self._p_reflect(np.where(ok, kh1, 1.0), eta1, eta2)
         P = np.where(tr, 1.0 - p_refl, p_refl)
@@ -201,7 +208,7 @@ class MicrofacetBsdf(Bsdf):
         pdf = P * g1_1 * pdf0
         weight = tint * (G2 / np.where(ok, g1_1, 1.0))[:, None]
         # pdf > 0 exactly where eval = weight * pdf > 0 (also where the product underflows)
-        ok &= np.max(weight * pdf[:, None], axis=1) > 0.0
+        ok &= row_max(weight * pdf[:, None]) > 0.0
         return np.where(ok[:, None], weight, 0.0), np.where(ok, pdf, 0.0), ok
 
     # --- the Bsdf interface -------------------------------------------------------------
@@ -249,14 +256,17 @@ class MicrofacetBsdf(Bsdf):
         ok &= c > 0.0
         refl = u1 < self._p_reflect(np.where(ok, c, 1.0), eta1, eta2)
         k_refl = 2.0 * c[:, None] * h - wo
-        if self.thin_walled:
-            k_tr = mirror_z(k_refl)
+        if np.all(refl):
+            wi = k_refl
         else:
-            # refraction about h with b = eta1/eta2 (never total internal: then refl is True)
-            b = eta1 / eta2
-            ct = np.sqrt(np.maximum(1.0 - b * b * (1.0 - c * c), 0.0))
-            k_tr, _ = unitize(-b[:, None] * wo + (b * c - ct)[:, None] * h)
-        wi = np.where(refl[:, None], k_refl, k_tr)
+            if self.thin_walled:
+                k_tr = mirror_z(k_refl)
+            else:
+                # refraction about h with b = eta1/eta2 (never total internal: then refl is True)
+                b = eta1 / eta2
+                ct = np.sqrt(np.maximum(1.0 - b * b * (1.0 - c * c), 0.0))
+                k_tr, _ = unitize(-b[:, None] * wo + (b * c - ct)[:, None] * h)
+            wi = np.where(refl[:, None], k_refl, k_tr)
         ok &= np.where(refl, wi[:, 2] > 0.0, wi[:, 2] < 0.0)
         weight, pdf, ok2 = self._kernel(wo, wi, setup)
         ok &= ok2

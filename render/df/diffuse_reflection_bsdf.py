@@ -123,6 +123,10 @@ class DiffuseReflectionBsdf(Bsdf):
         self.roughness = saturate(lane_float(roughness, "roughness"))
         self.multiscatter_tint = saturate(lane_color(multiscatter_tint, "multiscatter_tint"))
         self._black = np.all(self.tint == 0, axis=1) & np.all(self.multiscatter_tint == 0, axis=1)
+        # terms that are exactly 0 and skipped: roughness 0 (A = 1, B = 0) is Lambert, and
+        # multiscatter_tint 0 needs no energy compensation
+        self._rough = bool(np.any(self.roughness > 0))
+        self._compensated = bool(np.any(self.multiscatter_tint > 0))
 
     def __repr__(self) -> str:
         return (
@@ -145,34 +149,40 @@ class DiffuseReflectionBsdf(Bsdf):
         tint, sigma, ms_tint, black = self._params(n)
         mu1, mu2 = wo[:, 2], wi[:, 2]
         valid = (mu1 > TOL.cos_zero) & (mu2 > TOL.cos_zero) & ~black
+        if not self._rough:
+            return np.where(valid[:, None], tint, 0.0), valid  # Lambert
         # Fujii's Oren–Nayar: s / t with t = max(mu1, mu2) where s > 0
         a = 1.0 / (1.0 + _C_A * sigma)
         b = sigma * a
-        s = dot(wo, wi) - mu1 * mu2
+        # s = sin t1 sin t2 cos(dphi) >= -1; rounding can give -1 - ulp at grazing opposite
+        # azimuths, and A + B s < 0 with it at sigma = 1 (A = B)
+        s = np.maximum(dot(wo, wi) - mu1 * mu2, -1.0)
         tmax = np.maximum(np.maximum(mu1, mu2), TOL.cos_zero)
         s = np.where(s > 0.0, s / tmax, s)
-        single = (a + b * s)[:, None] * tint
-        # energy compensation: 1 - rho(mu) = B (C_A - G(mu)/pi), no cancellation at small sigma
-        e1 = _C_A - _g(mu1) / np.pi
-        e2 = _C_A - _g(mu2) / np.pi
-        multi = (b * np.maximum(e1, 0.0) * np.maximum(e2, 0.0) / (_C_A - _C_AVG))[:, None] * ms_tint
-        return np.where(valid[:, None], single + multi, 0.0), valid
+        value = (a + b * s)[:, None] * tint
+        if self._compensated:
+            # energy compensation: 1 - rho(mu) = B (C_A - G(mu)/pi), no cancellation at small sigma
+            e1 = _C_A - _g(mu1) / np.pi
+            e2 = _C_A - _g(mu2) / np.pi
+            value = value + (
+                b * np.maximum(e1, 0.0) * np.maximum(e2, 0.0) / (_C_A - _C_AVG)
+            )[:, None] * ms_tint
+        return np.where(valid[:, None], value, 0.0), valid
 
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
+    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
         wo, wi = check_dirs(wo, wi)
         _, wo, wi = orient(wo, wi)
         value, valid = self._value(wo, wi)
+        pdf = np.where(valid, wi[:, 2] * INV_PI, 0.0)
         return check_finite(
-            "diffuse_reflection_bsdf.eval",
-            value * (np.where(valid, wi[:, 2], 0.0) * INV_PI)[:, None],
-            nonnegative=True,
-        )
+            "diffuse_reflection_bsdf.eval", value * pdf[:, None], nonnegative=True
+        ), pdf
+
+    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
+        return self.eval_pdf(wo, wi)[0]
 
     def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        wo, wi = check_dirs(wo, wi)
-        _, wo, wi = orient(wo, wi)
-        _, valid = self._value(wo, wi)
-        return np.where(valid, wi[:, 2] * INV_PI, 0.0)
+        return self.eval_pdf(wo, wi)[1]
 
     def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
         (wo,) = check_dirs(wo, names=("wo",))

@@ -15,6 +15,9 @@ from render.integrator import Integrator, render
 from render.lights import ConstantEnvironment, DirectionalLight, PointLight, SpotLight
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
 
+#: both implementations for scenes the compiled path can render (render.compiled)
+PATHS = ["general", "compiled"]
+
 
 def diffuse(tint=1.0, **kw):
     return M.material(surface=M.material_surface(M.df.diffuse_reflection_bsdf(tint=tint)), **kw)
@@ -45,7 +48,8 @@ def mean_and_error(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return px.mean(axis=0), px.std(axis=0, ddof=1) / math.sqrt(len(px))
 
 
-def test_white_furnace_sphere_disappears():
+@pytest.mark.parametrize("path", PATHS)
+def test_white_furnace_sphere_disappears(path):
     # a white diffuse sphere in a uniform white environment: every pixel is 1 in expectation
     cam = Camera(position=(0, 0, 4), look_at=(0, 0, 0), fov_y_deg=30, width=64, height=64)
     scene = Scene(
@@ -54,7 +58,7 @@ def test_white_furnace_sphere_disappears():
         [ConstantEnvironment(1.0)],
         RenderSettings(64, 64, spp=8, max_depth=-1, rr_depth=5),
     )
-    film = render(scene, progress=False)
+    film = render(scene, progress=False, path=path)
     img = film.rgb()
     assert np.all(np.isfinite(img)) and img.min() >= 0
     sphere = film.alpha() > 0.999
@@ -65,7 +69,8 @@ def test_white_furnace_sphere_disappears():
     assert np.allclose(img[film.alpha() == 0], 1.0)
 
 
-def test_grey_furnace_matches_geometric_series():
+@pytest.mark.parametrize("path", PATHS)
+def test_grey_furnace_matches_geometric_series(path):
     # tint 0.5, unlimited depth, uniform environment 1: the sphere is convex, so every
     # bounce leaves it: L = 0.5 * 1 exactly (one bounce, then the environment)
     cam = Camera(position=(0, 0, 4), look_at=(0, 0, 0), fov_y_deg=30, width=48, height=48)
@@ -75,7 +80,7 @@ def test_grey_furnace_matches_geometric_series():
         [ConstantEnvironment(1.0)],
         RenderSettings(48, 48, spp=8, max_depth=-1),
     )
-    film = render(scene, progress=False)
+    film = render(scene, progress=False, path=path)
     sphere = film.alpha() > 0.999
     mean, err = mean_and_error(film.rgb()[sphere])
     assert np.all(np.abs(mean - 0.5) < 4 * err + 1e-3), (mean, err)
@@ -131,7 +136,8 @@ def test_directional_and_spot_lights():
     assert np.all(img[outside] == 0.0)
 
 
-def test_constant_environment_on_a_plane_mis():
+@pytest.mark.parametrize("path", PATHS)
+def test_constant_environment_on_a_plane_mis(path):
     # environment L over the upper hemisphere, diffuse rho: L_out = rho * L (direct only);
     # light sampling and BSDF sampling both contribute (MIS), so both weights are tested
     rho, le = 0.7, 1.3
@@ -141,7 +147,7 @@ def test_constant_environment_on_a_plane_mis():
         [ConstantEnvironment(le)],
         RenderSettings(32, 32, spp=16, max_depth=2),
     )
-    img = render(scene, progress=False).rgb()
+    img = render(scene, progress=False, path=path).rgb()
     mean, err = mean_and_error(img)
     assert np.all(np.abs(mean - rho * le) < 4 * err), (mean, err)
 
@@ -155,7 +161,8 @@ def _rect_form_factor(x: float, y: float) -> float:
 
 
 @pytest.mark.parametrize("half_size", [0.25, 2.0])
-def test_area_light_quad_irradiance(half_size):
+@pytest.mark.parametrize("path", PATHS)
+def test_area_light_quad_irradiance(half_size, path):
     # a diffuse emitter of radiance le, a square of side 2a at height h facing down:
     # E = pi le * 4 F(a/h, a/h) below its centre; L_out = rho/pi * E
     rho, le, h = 0.5, 2.0, 1.0
@@ -172,13 +179,14 @@ def test_area_light_quad_irradiance(half_size):
         [],
         RenderSettings(16, 16, spp=64, max_depth=2),
     )
-    img = render(scene, progress=False).rgb()
+    img = render(scene, progress=False, path=path).rgb()
     expected = rho * le * 4 * _rect_form_factor(a / h, a / h)
     mean, err = mean_and_error(img)
     assert np.all(np.abs(mean - expected) < 4 * err + 1e-4 * expected), (mean, err, expected)
 
 
-def test_emitter_seen_directly_and_from_behind():
+@pytest.mark.parametrize("path", PATHS)
+def test_emitter_seen_directly_and_from_behind(path):
     le = 3.0
     quad = SceneObject(
         Plane(size=(4, 4), origin=(-2, -2, 0)), emissive_material(np.full(3, np.pi * le))
@@ -187,7 +195,7 @@ def test_emitter_seen_directly_and_from_behind():
     back = Camera(position=(0, 0, -2), look_at=(0, 0, 0), width=8, height=8, fov_y_deg=20)
     for cam, value in ((front, le), (back, 0.0)):
         scene = Scene(cam, [quad], [], RenderSettings(8, 8, spp=2))
-        img = render(scene, progress=False).rgb()
+        img = render(scene, progress=False, path=path).rgb()
         assert np.allclose(img, value, rtol=1e-12)
 
 

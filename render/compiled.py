@@ -1,0 +1,537 @@
+"""The integrator's compiled path: the same path tracer in numba loops, for simple scenes.
+
+The general integrator (:mod:`render.integrator`) shades a wavefront with numpy passes
+over a material tree; on the Handbook stage almost all of its time goes to those passes
+and not to Embree.  When every material of a scene is a single elemental bsdf with
+constant arguments (:func:`render.compiled_df.params_of`), perhaps with constant
+``diffuse_edf`` emission, and nothing else the general path handles (no bump, cutout,
+volume, thin-walled backface or AOVs; the lights are emissive objects and at most a
+constant environment), :class:`CompiledTrace` runs each bounce as one compiled loop over
+the lanes instead.
+
+It is the same algorithm, lane for lane: the same random numbers drawn in the same
+order, the same light choice, MIS weights, Russian roulette, ray offsets and shadow-ray
+aims, and Embree (embreex) still traces every ray in batches.  The tests hold its images
+equal to the general path's with the same seed.  Displaced objects qualify (their
+triangles are diced before rendering).
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numba
+import numpy as np
+
+from render.camera import primary_rays
+from render.compiled_df import BLACK, PARAM_WIDTH, covers, eval_pdf, params_of, rows_of, sample
+from render.lights import INFINITE_DISTANCE, AreaLight, ConstantEnvironment
+from render.numerics import dot
+
+__all__ = ["CompiledTrace", "compiled_reason"]
+
+INV_PI = 1.0 / np.pi
+
+#: Scene tables of the kernels (float64 unless noted).
+Tables = namedtuple(
+    "Tables",
+    [
+        "packed",  # (v, 14) positions, normals, tangent_u, tangent_v, uv per vertex
+        "faces",  # (f, 3) int64
+        "face_normal",  # (f, 3)
+        "face_object",  # (f,) int64
+        "params",  # (k, PARAM_WIDTH) compiled bsdf rows
+        "emit_hit",  # (k, 3) radiance seen when a path hits object k (front side)
+        "emit_light",  # (k, 3) radiance of object k's light samples (front side)
+        "area_pdf",  # (k,) light-selection probability / area
+        "light_object",  # (l,) int64 object of each light, -1 for the environment
+        "light_first",  # (l + 1,) int64 range of each light's triangles in light_faces
+        "light_faces",  # (t,) int64 emissive triangles
+        "light_cdf",  # (t,) area cdf within each light
+        "light_corners",  # (t, 3, 3) their corners
+        "light_pdf_area",  # (l,) 1 / area
+        "env",  # (3,) constant environment radiance (0: none)
+        "scalars",  # (4,) select_pdf, eps, max_depth, rr_depth
+    ],
+)
+
+
+def compiled_reason(integ) -> str | None:
+    """Why the scene of ``integ`` cannot take the compiled path (None: it can)."""
+    if integ.aovs:
+        return "AOVs are written by the general path"
+    if integ.media or integ.cutout.any() or integ.two_faced.any() or integ.null_candidate.any():
+        return "volumes, cutouts, thin-walled backfaces and null interfaces need the general path"
+    for obj in integ.objects:
+        node = obj.material.surface.scattering
+        if node is not None and not covers(node):
+            return f"{obj.name}: its bsdf is not one elemental bsdf the kernels model"
+    for light in integ.lights.lights:
+        if isinstance(light, AreaLight):
+            if integ.lights.area_by_object[light.object_id] is not light or (
+                _constant_emission(integ, light.object_id) is None
+            ):
+                return "emission that is not a constant diffuse_edf needs the general path"
+        elif not isinstance(light, ConstantEnvironment):
+            return f"{type(light).__name__} needs the general path"
+    return None
+
+
+def _constant_emission(integ, k: int):
+    from render.integrator import _constant_diffuse_emission
+
+    return _constant_diffuse_emission(integ.objects[k].material)
+
+
+class CompiledTrace:
+    """``Integrator.trace`` for scenes :func:`compiled_reason` accepts.
+
+    Parameters
+    ----------
+    integ : render.integrator.Integrator
+    """
+
+    def __init__(self, integ):
+        geo = integ.geo
+        n_obj = len(integ.objects)
+        params = np.zeros((n_obj, PARAM_WIDTH))
+        params[:, 0] = BLACK
+        emit_hit = np.zeros((n_obj, 3))
+        emit_light = np.zeros((n_obj, 3))
+        #: objects shaded per lane by numpy first (arguments that vary over the surface,
+        #: a bumped normal); the kernels take their rows and normals per lane
+        self.varying = np.zeros(n_obj, dtype=bool)
+        for k, obj in enumerate(integ.objects):
+            node = obj.material.surface.scattering
+            row = None if node is None else params_of(node)
+            if row is not None:
+                params[k] = row
+            self.varying[k] = obj.material.geometry.normal is not None or (
+                node is not None and row is None
+            )
+            const = _constant_emission(integ, k)
+            if const is not None:
+                intensity = np.broadcast_to(
+                    np.asarray(obj.material.surface.emission.intensity, dtype=np.float64), (3,)
+                )
+                radiance, power = const
+                light = integ.lights.area_by_object[k]
+                # as the general path computes them: edf.eval (1/pi) times the intensity
+                # (per area in power mode) on a hit, intensity / pi (per area) when sampled
+                emit_hit[k] = INV_PI * (intensity / light.area if power else intensity)
+                emit_light[k] = radiance / integ._object_area(k) if power else radiance
+        lights = integ.lights.lights
+        light_object = np.full(len(lights), -1, dtype=np.int64)
+        light_first = np.zeros(len(lights) + 1, dtype=np.int64)
+        faces, cdf, corners, pdf_area = [], [], [], np.zeros(len(lights))
+        env = np.zeros(3)
+        for j, light in enumerate(lights):
+            if isinstance(light, AreaLight):
+                light_object[j] = light.object_id
+                faces.append(light.faces)
+                cdf.append(light._cdf)
+                corners.append(light.corners)
+                pdf_area[j] = light.pdf_area
+            else:
+                env = np.asarray(light.radiance, dtype=np.float64)
+            light_first[j + 1] = light_first[j] + (len(light.faces) if light_object[j] >= 0 else 0)
+        self.integ = integ
+        self.tables = Tables(
+            geo.packed,
+            geo.faces,
+            geo.face_normal,
+            geo.face_object.astype(np.int64),
+            params,
+            emit_hit,
+            emit_light,
+            np.asarray(integ.area_pdf, dtype=np.float64),
+            light_object,
+            light_first,
+            np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
+            np.concatenate(cdf) if cdf else np.zeros(0),
+            np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
+            pdf_area,
+            env,
+            np.array(
+                [
+                    integ.lights.select_pdf,
+                    integ.eps,
+                    float(integ.max_depth),
+                    float(integ.settings.rr_depth),
+                ]
+            ),
+        )
+        # compile (or load from numba's cache) before worker threads start
+        self.trace(np.zeros(1, dtype=np.int64), np.random.default_rng(0))
+
+    def trace(self, pixel: np.ndarray, rng: np.random.Generator) -> tuple:
+        """Trace one path per entry of ``pixel`` (see :meth:`Integrator.trace`)."""
+        integ = self.integ
+        n = len(pixel)
+        o, d = primary_rays(integ.camera, pixel, rng.random((n, 2)))
+        L = np.zeros((n, 3))
+        alpha = np.zeros(n)
+        ids = np.arange(n)
+        beta = np.ones((n, 3))
+        depth = np.ones(n, dtype=np.int64)
+        prev_pdf = np.zeros(n)
+        prev_delta = np.ones(n, dtype=bool)
+        offset = integ.geo.face_offset
+        while len(ids):
+            hit = integ._intersect(o, d)
+            prim = hit["primID"]
+            face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
+            m = int(np.count_nonzero(prim >= 0))
+            lane_row, lane_params, lane_normal = self._varying_rows(face, hit, d)
+            # the general path's draws, in its order, for the lanes that hit a surface
+            rng.random(m)  # cutout decisions (no cutouts here)
+            u_light = rng.random((m, 3))
+            u_bsdf = rng.random((m, 3))
+            u_rr = rng.random(m)
+            out = _bounce(
+                self.tables,
+                face,
+                hit["u"].astype(np.float64),
+                hit["v"].astype(np.float64),
+                hit["tfar"].astype(np.float64),
+                o,
+                d,
+                ids,
+                beta,
+                depth,
+                prev_pdf,
+                prev_delta,
+                u_light,
+                u_bsdf,
+                u_rr,
+                lane_row,
+                lane_params,
+                lane_normal,
+                L,
+                alpha,
+            )
+            n_shadow, s_org, s_dir, s_dist, s_c, s_id, n_next, nxt = out
+            if n_shadow:
+                blocked = integ._occluded(
+                    s_org[:n_shadow], s_dir[:n_shadow], s_dist[:n_shadow], rng
+                )
+                _add_unblocked(L, s_id[:n_shadow], s_c[:n_shadow], blocked)
+            o, d, ids, beta, depth, prev_pdf, prev_delta = (a[:n_next] for a in nxt)
+        return L, alpha, {}
+
+    def _varying_rows(self, face, hit, d):
+        """Parameter rows and shading normals of the lanes that hit varying objects, by
+        ``material.shade`` over each object's lanes (the general path's shading):
+        ``lane_row`` (m,) indexes ``params`` (q, PARAM_WIDTH) and ``normals`` (q, 3),
+        -1 for lanes whose object has a constant row."""
+        integ = self.integ
+        lane_row = np.full(len(face), -1, dtype=np.int64)
+        hit_objects = integ.geo.face_object[np.maximum(face, 0)]
+        lanes = np.flatnonzero((face >= 0) & self.varying[hit_objects])
+        if len(lanes) == 0:
+            return lane_row, np.zeros((0, PARAM_WIDTH)), np.zeros((0, 3))
+        params = np.empty((len(lanes), PARAM_WIDTH))
+        normals = np.empty((len(lanes), 3))
+        objs = hit_objects[lanes]
+        for k in np.unique(objs):
+            sel = np.flatnonzero(objs == k)
+            f = face[lanes[sel]]
+            p, ns, tu, tv, uv = integ._attributes(
+                f, hit["u"][lanes[sel]].astype(np.float64), hit["v"][lanes[sel]].astype(np.float64)
+            )
+            front = dot(-d[lanes[sel]], integ.geo.face_normal[f]) > 0
+            sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+            params[sel] = rows_of(sh.bsdf, len(sel))
+            normals[sel] = ns if sh.normal_world is None else sh.normal_world
+        lane_row[lanes] = np.arange(len(lanes))
+        return lane_row, params, normals
+
+
+# ------------------------------------------------------------------------- kernels
+@numba.njit(nogil=True, cache=True)
+def _power(a, b):
+    a2 = a * a
+    b2 = b * b
+    s = a2 + b2
+    return a2 / s if s > 0.0 else 0.0
+
+
+@numba.njit(nogil=True, cache=True)
+def _dot(ax, ay, az, bx, by, bz):
+    # the general path's order: (x + z) + y
+    return ax * bx + az * bz + ay * by
+
+
+@numba.njit(nogil=True, cache=True)
+def _fast_unit(x, y, z):
+    """The integrator's _fast_unit for one vector: (ux, uy, uz, valid); rows too short
+    are left as they are."""
+    length = np.sqrt(_dot(x, y, z, x, y, z))
+    if length > 1e-150:
+        return x / length, y / length, z / length, True
+    return x, y, z, False
+
+
+@numba.njit(nogil=True, cache=True)
+def _unitize(x, y, z):
+    """render.numerics.unitize for one vector: (ux, uy, uz, valid)."""
+    scale = max(max(abs(x), abs(y)), abs(z))
+    if not scale > 1e-300:
+        return 0.0, 0.0, 0.0, False
+    wx, wy, wz = x / scale, y / scale, z / scale
+    length = np.sqrt(_dot(wx, wy, wz, wx, wy, wz))
+    return wx / length, wy / length, wz / length, True
+
+
+@numba.njit(nogil=True, cache=True)
+def _frame(nx, ny, nz, tx, ty, tz):
+    """Frame.from_normal_tangent for one lane: (s, t) as six floats."""
+    c = _dot(tx, ty, tz, nx, ny, nz)
+    px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
+    sx, sy, sz, ok = _unitize(px, py, pz)
+    ok = ok and np.sqrt(px * px + py * py + pz * pz) > 1e-8 * np.sqrt(tx * tx + ty * ty + tz * tz)
+    if not ok:  # Frame.from_normal (Duff et al.)
+        sign = 1.0 if nz >= 0.0 else -1.0
+        a = -1.0 / (sign + nz)
+        b = nx * ny * a
+        sx, sy, sz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
+    return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+
+
+@numba.njit(nogil=True, cache=True)
+def _sample_light(tb, j, px, py, pz, u1, u2):
+    """LightSet.sample_li of light ``j`` at p: (wi xyz, distance, radiance rgb, pdf)."""
+    select = tb.scalars[0]
+    if tb.light_object[j] < 0:  # constant environment: uniform sphere
+        z = 1.0 - 2.0 * u1
+        r = 2.0 * np.sqrt(max(u1 * (1.0 - u1), 0.0))
+        phi = 2.0 * np.pi * u2
+        return (
+            r * np.cos(phi),
+            r * np.sin(phi),
+            z,
+            INFINITE_DISTANCE,
+            tb.env[0],
+            tb.env[1],
+            tb.env[2],
+            0.25 / np.pi * select,
+        )
+    a, b = tb.light_first[j], tb.light_first[j + 1]
+    cdf = tb.light_cdf[a:b]
+    k = min(max(np.searchsorted(cdf, u1, side="right"), 0), b - a - 1)
+    lo = cdf[k - 1] if k > 0 else 0.0
+    width = cdf[k] - lo
+    u0 = min(max((u1 - lo) / width if width > 0 else 0.5, 0.0), 1.0)
+    su = np.sqrt(max(u0, 0.0))
+    b1 = 1.0 - su
+    b2 = u2 * su
+    b0 = 1.0 - b1 - b2
+    c = tb.light_corners[a + k]
+    xx = b0 * c[0, 0] + b1 * c[1, 0] + b2 * c[2, 0]
+    xy = b0 * c[0, 1] + b1 * c[1, 1] + b2 * c[2, 1]
+    xz = b0 * c[0, 2] + b1 * c[1, 2] + b2 * c[2, 2]
+    dx, dy, dz = xx - px, xy - py, xz - pz
+    dist = np.sqrt(dx * dx + dy * dy + dz * dz)
+    wx, wy, wz, ok = _unitize(dx, dy, dz)
+    f = tb.light_faces[a + k]
+    gn = tb.face_normal[f]
+    cos_l = abs(_dot(wx, wy, wz, gn[0], gn[1], gn[2]))
+    if not (ok and dist > 0.0 and cos_l > 1e-12):
+        return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0
+    pdf = dist * dist / cos_l * tb.light_pdf_area[j] * select
+    obj = tb.light_object[j]
+    if _dot(-wx, -wy, -wz, gn[0], gn[1], gn[2]) > 0.0:  # emitters light their front side
+        e = tb.emit_light[obj]
+        return wx, wy, wz, dist, e[0], e[1], e[2], pdf
+    return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf
+
+
+@numba.njit(nogil=True, cache=True)
+def _bounce(
+    tb,
+    face,
+    b1,
+    b2,
+    tfar,
+    o,
+    d,
+    ids,
+    beta,
+    depth,
+    prev_pdf,
+    prev_delta,
+    u_light,
+    u_bsdf,
+    u_rr,
+    lane_row,
+    lane_params,
+    lane_normal,
+    L,
+    alpha,
+):
+    """One segment of every lane: escapes, emission, NEE (shadow rays returned), the
+    sampled continuation and Russian roulette.  Returns the shadow rays and the lanes
+    that go on, compacted in order.  Lanes with ``lane_row >= 0`` take their bsdf row and
+    shading normal from ``lane_params`` and ``lane_normal``, the others their object's."""
+    m = len(face)
+    select, eps = tb.scalars[0], tb.scalars[1]
+    max_depth, rr_depth = tb.scalars[2], tb.scalars[3]
+    n_lights = len(tb.light_object)
+    s_org = np.empty((m, 3))
+    s_dir = np.empty((m, 3))
+    s_dist = np.empty(m)
+    s_c = np.empty((m, 3))
+    s_id = np.empty(m, dtype=np.int64)
+    n_o = np.empty((m, 3))
+    n_d = np.empty((m, 3))
+    n_ids = np.empty(m, dtype=np.int64)
+    n_beta = np.empty((m, 3))
+    n_depth = np.empty(m, dtype=np.int64)
+    n_pdf = np.empty(m)
+    n_delta = np.empty(m, dtype=np.bool_)
+    ns = 0
+    nn = 0
+    r = -1  # rank of the lane among the surface hits (its random numbers)
+    env_pdf = 0.25 / np.pi * select
+    for i in range(m):
+        lane = ids[i]
+        if face[i] < 0:
+            if tb.env[0] > 0.0 or tb.env[1] > 0.0 or tb.env[2] > 0.0:
+                w = 1.0 if prev_delta[i] else _power(prev_pdf[i], env_pdf)
+                for c in range(3):
+                    L[lane, c] += beta[i, c] * tb.env[c] * w
+            continue
+        r += 1
+        f = face[i]
+        k = tb.face_object[f]
+        # attributes: Geometry.interpolate, then unit normal and tangent
+        v0, v1, v2 = tb.faces[f, 0], tb.faces[f, 1], tb.faces[f, 2]
+        w1, w2 = b1[i], b2[i]
+        w0 = 1.0 - w1 - w2
+        tp = tb.packed
+        px = w0 * tp[v0, 0] + w1 * tp[v1, 0] + w2 * tp[v2, 0]
+        py = w0 * tp[v0, 1] + w1 * tp[v1, 1] + w2 * tp[v2, 1]
+        pz = w0 * tp[v0, 2] + w1 * tp[v1, 2] + w2 * tp[v2, 2]
+        nx, ny, nz, ok = _fast_unit(
+            w0 * tp[v0, 3] + w1 * tp[v1, 3] + w2 * tp[v2, 3],
+            w0 * tp[v0, 4] + w1 * tp[v1, 4] + w2 * tp[v2, 4],
+            w0 * tp[v0, 5] + w1 * tp[v1, 5] + w2 * tp[v2, 5],
+        )
+        gn = tb.face_normal[f]
+        gx, gy, gz = gn[0], gn[1], gn[2]
+        if not ok:
+            nx, ny, nz = gx, gy, gz
+        tx, ty, tz, _ = _fast_unit(
+            w0 * tp[v0, 6] + w1 * tp[v1, 6] + w2 * tp[v2, 6],
+            w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
+            w0 * tp[v0, 8] + w1 * tp[v1, 8] + w2 * tp[v2, 8],
+        )
+        row = lane_row[i]
+        if row >= 0:
+            nx, ny, nz = lane_normal[row, 0], lane_normal[row, 1], lane_normal[row, 2]
+            p = lane_params[row]
+        else:
+            p = tb.params[k]
+        sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+        ox, oy, oz = -d[i, 0], -d[i, 1], -d[i, 2]
+        wox = _dot(ox, oy, oz, sx, sy, sz)
+        woy = _dot(ox, oy, oz, qx, qy, qz)
+        woz = _dot(ox, oy, oz, nx, ny, nz)
+        g_wo = _dot(ox, oy, oz, gx, gy, gz)
+        if depth[i] == 1:
+            alpha[lane] = 1.0
+        # emission, weighted against light sampling
+        e = tb.emit_hit[k]
+        if (e[0] != 0.0 or e[1] != 0.0 or e[2] != 0.0) and g_wo > 0.0 and woz > 1e-10:
+            cos_l = abs(g_wo)
+            pl = tb.area_pdf[k] * tfar[i] ** 2 / cos_l
+            w = 1.0 if prev_delta[i] else _power(prev_pdf[i], pl)
+            for c in range(3):
+                L[lane, c] += beta[i, c] * e[c] * w
+        if p[0] == BLACK or not depth[i] < max_depth:
+            continue
+        # next-event estimation
+        j = min(int(u_light[r, 0] * n_lights), n_lights - 1)
+        lx, ly, lz, ldist, l0, l1, l2, lpdf = _sample_light(
+            tb, j, px, py, pz, u_light[r, 1], u_light[r, 2]
+        )
+        wlx = _dot(lx, ly, lz, sx, sy, sz)
+        wly = _dot(lx, ly, lz, qx, qy, qz)
+        wlz = _dot(lx, ly, lz, nx, ny, nz)
+        f0, f1, f2, pb = eval_pdf(p, wox, woy, woz, wlx, wly, wlz)
+        g_wi = _dot(lx, ly, lz, gx, gy, gz)
+        if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
+            w = _power(lpdf, pb) / lpdf
+            c0, c1, c2 = (
+                beta[i, 0] * f0 * l0 * w,
+                beta[i, 1] * f1 * l1 * w,
+                beta[i, 2] * f2 * l2 * w,
+            )
+            if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                side = 1.0 if g_wi >= 0.0 else -1.0
+                qx0, qy0, qz0 = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+                finite = ldist < INFINITE_DISTANCE
+                if finite:
+                    ex, ey, ez = px + lx * ldist - qx0, py + ly * ldist - qy0, pz + lz * ldist - qz0
+                    ux, uy, uz, ok = _unitize(ex, ey, ez)
+                    if not ok:
+                        ux, uy, uz = lx, ly, lz
+                    sdist = np.sqrt(ex * ex + ey * ey + ez * ez)
+                else:
+                    ux, uy, uz, sdist = lx, ly, lz, ldist
+                s_org[ns, 0], s_org[ns, 1], s_org[ns, 2] = qx0, qy0, qz0
+                s_dir[ns, 0], s_dir[ns, 1], s_dir[ns, 2] = ux, uy, uz
+                s_dist[ns] = sdist * (1.0 - 1e-6) - eps
+                s_c[ns, 0], s_c[ns, 1], s_c[ns, 2] = c0, c1, c2
+                s_id[ns] = lane
+                ns += 1
+        # the bsdf's sample continues the path
+        wix, wiy, wiz, pdf, w0, w1, w2, delta, valid = sample(
+            p, wox, woy, woz, u_bsdf[r, 0], u_bsdf[r, 1], u_bsdf[r, 2]
+        )
+        if not valid or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
+            continue
+        dx = wix * sx + wiy * qx + wiz * nx
+        dy = wix * sy + wiy * qy + wiz * ny
+        dz = wix * sz + wiy * qz + wiz * nz
+        g_new = _dot(dx, dy, dz, gx, gy, gz)
+        if g_new == 0.0 or (g_new * g_wo > 0.0) != (wiz * woz > 0.0):
+            continue
+        t0, t1, t2 = beta[i, 0] * w0, beta[i, 1] * w1, beta[i, 2] * w2
+        if depth[i] >= rr_depth:
+            q = min(max(max(t0, t1), t2), 0.95)
+            if not u_rr[r] < q:
+                continue
+            q = max(q, 1e-300)
+            t0, t1, t2 = t0 / q, t1 / q, t2 / q
+        side = 1.0 if g_new >= 0.0 else -1.0
+        n_o[nn, 0], n_o[nn, 1], n_o[nn, 2] = (
+            px + side * eps * gx,
+            py + side * eps * gy,
+            pz + side * eps * gz,
+        )
+        n_d[nn, 0], n_d[nn, 1], n_d[nn, 2] = dx, dy, dz
+        n_ids[nn] = lane
+        n_beta[nn, 0], n_beta[nn, 1], n_beta[nn, 2] = t0, t1, t2
+        n_depth[nn] = depth[i] + 1
+        n_pdf[nn] = pdf
+        n_delta[nn] = delta
+        nn += 1
+    return (
+        ns,
+        s_org,
+        s_dir,
+        s_dist,
+        s_c,
+        s_id,
+        nn,
+        (n_o, n_d, n_ids, n_beta, n_depth, n_pdf, n_delta),
+    )
+
+
+@numba.njit(nogil=True, cache=True)
+def _add_unblocked(L, s_id, s_c, blocked):
+    for i in range(len(s_id)):
+        if not blocked[i]:
+            for c in range(3):
+                L[s_id[i], c] += s_c[i, c]
