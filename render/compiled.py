@@ -182,7 +182,7 @@ class CompiledTrace:
             prim = hit["primID"]
             face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
             m = int(np.count_nonzero(prim >= 0))
-            lane_row, lane_params, lane_normal = self._varying_rows(face, hit, d)
+            lane_row, params, lane_normal = self._varying_rows(face, hit, d)
             # the general path's draws, in its order, for the lanes that hit a surface
             rng.random(m)  # cutout decisions (no cutouts here)
             u_light = rng.random((m, 3))
@@ -205,7 +205,7 @@ class CompiledTrace:
                 u_bsdf,
                 u_rr,
                 lane_row,
-                lane_params,
+                params,
                 lane_normal,
                 L,
                 alpha,
@@ -221,15 +221,18 @@ class CompiledTrace:
 
     def _varying_rows(self, face, hit, d):
         """Parameter rows and shading normals of the lanes that hit varying objects, by
-        ``material.shade`` over each object's lanes (the general path's shading):
-        ``lane_row`` (m,) indexes ``params`` (q, PARAM_WIDTH) and ``normals`` (q, 3),
-        -1 for lanes whose object has a constant row."""
+        ``material.shade`` over each object's lanes (the general path's shading).
+
+        Returns ``lane_row`` (m,), ``params`` (k + q, PARAM_WIDTH): the objects' rows, then
+        one per varying lane, and ``normals`` (q, 3): lane ``i`` takes row
+        ``k + lane_row[i]`` and normal ``lane_row[i]``, or its object's row where
+        ``lane_row[i] = -1``."""
         integ = self.integ
         lane_row = np.full(len(face), -1, dtype=np.int64)
         hit_objects = integ.geo.face_object[np.maximum(face, 0)]
         lanes = np.flatnonzero((face >= 0) & self.varying[hit_objects])
         if len(lanes) == 0:
-            return lane_row, np.zeros((0, PARAM_WIDTH)), np.zeros((0, 3))
+            return lane_row, self.tables.params, np.zeros((0, 3))
         params = np.empty((len(lanes), PARAM_WIDTH))
         normals = np.empty((len(lanes), 3))
         objs = hit_objects[lanes]
@@ -244,7 +247,7 @@ class CompiledTrace:
             params[sel] = rows_of(sh.bsdf, len(sel))
             normals[sel] = ns if sh.normal_world is None else sh.normal_world
         lane_row[lanes] = np.arange(len(lanes))
-        return lane_row, params, normals
+        return lane_row, np.concatenate([self.tables.params, params]), normals
 
 
 # ------------------------------------------------------------------------- kernels
@@ -298,11 +301,31 @@ def _frame(nx, ny, nz, tx, ty, tz):
     return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
 
 
-@numba.njit(nogil=True, cache=True)
-def _sample_light(tb, j, px, py, pz, u1, u2):
-    """LightSet.sample_li of light ``j`` at p: (wi xyz, distance, radiance rgb, pdf)."""
-    select = tb.scalars[0]
-    if tb.light_object[j] < 0:  # constant environment: uniform sphere
+@numba.njit(nogil=True, cache=True, inline="always")
+def _sample_light(
+    light_first,
+    light_cdf,
+    light_corners,
+    light_faces,
+    light_pdf_area,
+    light_object,
+    emit_light,
+    face_normal,
+    env,
+    select,
+    j,
+    px,
+    py,
+    pz,
+    u1,
+    u2,
+):
+    """LightSet.sample_li of light ``j`` at p: (wi xyz, distance, radiance rgb, pdf).
+
+    Takes the arrays of :data:`Tables` one by one and indexes them in place: an array
+    taken out of a tuple, or a row view, costs numba two atomic reference-count updates,
+    which in a per-lane loop cost more than the shading."""
+    if light_object[j] < 0:  # constant environment: uniform sphere
         z = 1.0 - 2.0 * u1
         r = 2.0 * np.sqrt(max(u1 * (1.0 - u1), 0.0))
         phi = 2.0 * np.pi * u2
@@ -311,38 +334,45 @@ def _sample_light(tb, j, px, py, pz, u1, u2):
             r * np.sin(phi),
             z,
             INFINITE_DISTANCE,
-            tb.env[0],
-            tb.env[1],
-            tb.env[2],
+            env[0],
+            env[1],
+            env[2],
             0.25 / np.pi * select,
         )
-    a, b = tb.light_first[j], tb.light_first[j + 1]
-    cdf = tb.light_cdf[a:b]
-    k = min(max(np.searchsorted(cdf, u1, side="right"), 0), b - a - 1)
-    lo = cdf[k - 1] if k > 0 else 0.0
-    width = cdf[k] - lo
+    a, b = light_first[j], light_first[j + 1]
+    # np.searchsorted(cdf, u1, side="right") over this light's triangles, clipped
+    lo_i, hi_i = a, b
+    while lo_i < hi_i:
+        mid = (lo_i + hi_i) // 2
+        if light_cdf[mid] <= u1:
+            lo_i = mid + 1
+        else:
+            hi_i = mid
+    t = min(lo_i, b - 1)
+    lo = light_cdf[t - 1] if t > a else 0.0
+    width = light_cdf[t] - lo
     u0 = min(max((u1 - lo) / width if width > 0 else 0.5, 0.0), 1.0)
     su = np.sqrt(max(u0, 0.0))
     b1 = 1.0 - su
     b2 = u2 * su
     b0 = 1.0 - b1 - b2
-    c = tb.light_corners[a + k]
-    xx = b0 * c[0, 0] + b1 * c[1, 0] + b2 * c[2, 0]
-    xy = b0 * c[0, 1] + b1 * c[1, 1] + b2 * c[2, 1]
-    xz = b0 * c[0, 2] + b1 * c[1, 2] + b2 * c[2, 2]
+    c = light_corners
+    xx = b0 * c[t, 0, 0] + b1 * c[t, 1, 0] + b2 * c[t, 2, 0]
+    xy = b0 * c[t, 0, 1] + b1 * c[t, 1, 1] + b2 * c[t, 2, 1]
+    xz = b0 * c[t, 0, 2] + b1 * c[t, 1, 2] + b2 * c[t, 2, 2]
     dx, dy, dz = xx - px, xy - py, xz - pz
     dist = np.sqrt(dx * dx + dy * dy + dz * dz)
     wx, wy, wz, ok = _unitize(dx, dy, dz)
-    f = tb.light_faces[a + k]
-    gn = tb.face_normal[f]
-    cos_l = abs(_dot(wx, wy, wz, gn[0], gn[1], gn[2]))
+    f = light_faces[t]
+    gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+    cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
     if not (ok and dist > 0.0 and cos_l > 1e-12):
         return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0
-    pdf = dist * dist / cos_l * tb.light_pdf_area[j] * select
-    obj = tb.light_object[j]
-    if _dot(-wx, -wy, -wz, gn[0], gn[1], gn[2]) > 0.0:  # emitters light their front side
-        e = tb.emit_light[obj]
-        return wx, wy, wz, dist, e[0], e[1], e[2], pdf
+    pdf = dist * dist / cos_l * light_pdf_area[j] * select
+    obj = light_object[j]
+    if _dot(-wx, -wy, -wz, gx, gy, gz) > 0.0:  # emitters light their front side
+        e = emit_light
+        return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf
     return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf
 
 
@@ -364,19 +394,40 @@ def _bounce(
     u_bsdf,
     u_rr,
     lane_row,
-    lane_params,
+    params,
     lane_normal,
     L,
     alpha,
 ):
     """One segment of every lane: escapes, emission, NEE (shadow rays returned), the
     sampled continuation and Russian roulette.  Returns the shadow rays and the lanes
-    that go on, compacted in order.  Lanes with ``lane_row >= 0`` take their bsdf row and
-    shading normal from ``lane_params`` and ``lane_normal``, the others their object's."""
+    that go on, compacted in order.  Bsdf rows come from ``params``
+    (:meth:`CompiledTrace._varying_rows`); lanes with ``lane_row >= 0`` also take their
+    shading normal from ``lane_normal``."""
+    (
+        packed,
+        faces,
+        face_normal,
+        face_object,
+        object_params,
+        emit_hit,
+        emit_light,
+        area_pdf,
+        light_object,
+        light_first,
+        light_faces,
+        light_cdf,
+        light_corners,
+        light_pdf_area,
+        env,
+        scalars,
+    ) = tb
     m = len(face)
-    select, eps = tb.scalars[0], tb.scalars[1]
-    max_depth, rr_depth = tb.scalars[2], tb.scalars[3]
-    n_lights = len(tb.light_object)
+    select, eps = scalars[0], scalars[1]
+    max_depth, rr_depth = scalars[2], scalars[3]
+    n_lights = len(light_object)
+    n_objects = len(object_params)
+    tp = packed
     s_org = np.empty((m, 3))
     s_dir = np.empty((m, 3))
     s_dist = np.empty(m)
@@ -396,19 +447,18 @@ def _bounce(
     for i in range(m):
         lane = ids[i]
         if face[i] < 0:
-            if tb.env[0] > 0.0 or tb.env[1] > 0.0 or tb.env[2] > 0.0:
+            if env[0] > 0.0 or env[1] > 0.0 or env[2] > 0.0:
                 w = 1.0 if prev_delta[i] else _power(prev_pdf[i], env_pdf)
                 for c in range(3):
-                    L[lane, c] += beta[i, c] * tb.env[c] * w
+                    L[lane, c] += beta[i, c] * env[c] * w
             continue
         r += 1
         f = face[i]
-        k = tb.face_object[f]
+        k = face_object[f]
         # attributes: Geometry.interpolate, then unit normal and tangent
-        v0, v1, v2 = tb.faces[f, 0], tb.faces[f, 1], tb.faces[f, 2]
+        v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
         w1, w2 = b1[i], b2[i]
         w0 = 1.0 - w1 - w2
-        tp = tb.packed
         px = w0 * tp[v0, 0] + w1 * tp[v1, 0] + w2 * tp[v2, 0]
         py = w0 * tp[v0, 1] + w1 * tp[v1, 1] + w2 * tp[v2, 1]
         pz = w0 * tp[v0, 2] + w1 * tp[v1, 2] + w2 * tp[v2, 2]
@@ -417,8 +467,7 @@ def _bounce(
             w0 * tp[v0, 4] + w1 * tp[v1, 4] + w2 * tp[v2, 4],
             w0 * tp[v0, 5] + w1 * tp[v1, 5] + w2 * tp[v2, 5],
         )
-        gn = tb.face_normal[f]
-        gx, gy, gz = gn[0], gn[1], gn[2]
+        gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
         if not ok:
             nx, ny, nz = gx, gy, gz
         tx, ty, tz, _ = _fast_unit(
@@ -426,12 +475,11 @@ def _bounce(
             w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
             w0 * tp[v0, 8] + w1 * tp[v1, 8] + w2 * tp[v2, 8],
         )
-        row = lane_row[i]
-        if row >= 0:
-            nx, ny, nz = lane_normal[row, 0], lane_normal[row, 1], lane_normal[row, 2]
-            p = lane_params[row]
-        else:
-            p = tb.params[k]
+        row = k
+        if lane_row[i] >= 0:
+            v = lane_row[i]
+            nx, ny, nz = lane_normal[v, 0], lane_normal[v, 1], lane_normal[v, 2]
+            row = n_objects + v
         sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
         ox, oy, oz = -d[i, 0], -d[i, 1], -d[i, 2]
         wox = _dot(ox, oy, oz, sx, sy, sz)
@@ -441,24 +489,39 @@ def _bounce(
         if depth[i] == 1:
             alpha[lane] = 1.0
         # emission, weighted against light sampling
-        e = tb.emit_hit[k]
-        if (e[0] != 0.0 or e[1] != 0.0 or e[2] != 0.0) and g_wo > 0.0 and woz > 1e-10:
+        e = emit_hit
+        if (e[k, 0] != 0.0 or e[k, 1] != 0.0 or e[k, 2] != 0.0) and g_wo > 0.0 and woz > 1e-10:
             cos_l = abs(g_wo)
-            pl = tb.area_pdf[k] * tfar[i] ** 2 / cos_l
+            pl = area_pdf[k] * tfar[i] ** 2 / cos_l
             w = 1.0 if prev_delta[i] else _power(prev_pdf[i], pl)
             for c in range(3):
-                L[lane, c] += beta[i, c] * e[c] * w
-        if p[0] == BLACK or not depth[i] < max_depth:
+                L[lane, c] += beta[i, c] * e[k, c] * w
+        if params[row, 0] == BLACK or not depth[i] < max_depth:
             continue
         # next-event estimation
         j = min(int(u_light[r, 0] * n_lights), n_lights - 1)
         lx, ly, lz, ldist, l0, l1, l2, lpdf = _sample_light(
-            tb, j, px, py, pz, u_light[r, 1], u_light[r, 2]
+            light_first,
+            light_cdf,
+            light_corners,
+            light_faces,
+            light_pdf_area,
+            light_object,
+            emit_light,
+            face_normal,
+            env,
+            select,
+            j,
+            px,
+            py,
+            pz,
+            u_light[r, 1],
+            u_light[r, 2],
         )
         wlx = _dot(lx, ly, lz, sx, sy, sz)
         wly = _dot(lx, ly, lz, qx, qy, qz)
         wlz = _dot(lx, ly, lz, nx, ny, nz)
-        f0, f1, f2, pb = eval_pdf(p, wox, woy, woz, wlx, wly, wlz)
+        f0, f1, f2, pb = eval_pdf(params, row, wox, woy, woz, wlx, wly, wlz)
         g_wi = _dot(lx, ly, lz, gx, gy, gz)
         if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
             w = _power(lpdf, pb) / lpdf
@@ -487,7 +550,7 @@ def _bounce(
                 ns += 1
         # the bsdf's sample continues the path
         wix, wiy, wiz, pdf, w0, w1, w2, delta, valid = sample(
-            p, wox, woy, woz, u_bsdf[r, 0], u_bsdf[r, 1], u_bsdf[r, 2]
+            params, row, wox, woy, woz, u_bsdf[r, 0], u_bsdf[r, 1], u_bsdf[r, 2]
         )
         if not valid or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
             continue

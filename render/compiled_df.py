@@ -40,12 +40,12 @@ Examples
 --------
 >>> from render.material import df
 >>> p = params_of(df.diffuse_reflection_bsdf(tint=0.5))
->>> f_r, f_g, f_b, pdf = eval_pdf(p, 0.0, 0.0, 1.0, 0.0, 0.6, 0.8)
+>>> f_r, f_g, f_b, pdf = eval_pdf(p[None], 0, 0.0, 0.0, 1.0, 0.0, 0.6, 0.8)
 >>> round(f_r * np.pi, 12), round(pdf * np.pi, 12)
 (0.4, 0.8)
->>> eval_pdf(p, 0.0, 0.0, 1.0, 0.0, 0.6, -0.8)  # below the surface
+>>> eval_pdf(p[None], 0, 0.0, 0.0, 1.0, 0.0, 0.6, -0.8)  # below the surface
 (0.0, 0.0, 0.0, 0.0)
->>> sample(params_of(df.specular_bsdf()), 0.6, 0.0, 0.8, 0.5, 0.5, 0.5)
+>>> sample(params_of(df.specular_bsdf())[None], 0, 0.6, 0.0, 0.8, 0.5, 0.5, 0.5)
 (-0.6, -0.0, 0.8, 1.0, 1.0, 1.0, 1.0, True, True)
 """
 
@@ -291,11 +291,11 @@ def _on_g(mu):
 
 
 @numba.njit(**_JIT)
-def _diffuse_value(p, wox, woy, woz, wix, wiy, wiz):
+def _diffuse_value(P, k, wox, woy, woz, wix, wiy, wiz):
     """``DiffuseReflectionBsdf._value`` for oriented ``wo`` -> ``(v_r, v_g, v_b, valid)``."""
-    tr, tg, tb = p[1], p[2], p[3]
-    sigma = p[4]
-    mr, mg, mb = p[6], p[7], p[8]
+    tr, tg, tb = P[k, 1], P[k, 2], P[k, 3]
+    sigma = P[k, 4]
+    mr, mg, mb = P[k, 6], P[k, 7], P[k, 8]
     black = tr == 0.0 and tg == 0.0 and tb == 0.0 and mr == 0.0 and mg == 0.0 and mb == 0.0
     mu1 = woz
     mu2 = wiz
@@ -326,11 +326,11 @@ def _diffuse_value(p, wox, woy, woz, wix, wiy, wiz):
 
 
 @numba.njit(**_JIT)
-def _diffuse_eval_pdf(p, wox, woy, woz, wix, wiy, wiz):
+def _diffuse_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     if woz < 0.0:  # orient: mirror both through the tangent plane
         woz = -woz
         wiz = -wiz
-    vr, vg, vb, valid = _diffuse_value(p, wox, woy, woz, wix, wiy, wiz)
+    vr, vg, vb, valid = _diffuse_value(P, k, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0
     pdf = wiz * _INV_PI
@@ -338,12 +338,12 @@ def _diffuse_eval_pdf(p, wox, woy, woz, wix, wiy, wiz):
 
 
 @numba.njit(**_JIT)
-def _diffuse_sample(p, wox, woy, woz, u2x, u2y):
+def _diffuse_sample(P, k, wox, woy, woz, u2x, u2y):
     flip = woz < 0.0
     if flip:
         woz = -woz
     wix, wiy, wiz = _cosine_hemisphere(u2x, u2y)
-    vr, vg, vb, valid = _diffuse_value(p, wox, woy, woz, wix, wiy, wiz)
+    vr, vg, vb, valid = _diffuse_value(P, k, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
     # the numpy class computes the pdf from the un-mirrored wi times -1: the same bits
@@ -357,10 +357,10 @@ def _diffuse_sample(p, wox, woy, woz, u2x, u2y):
 
 
 @numba.njit(inline="always", **_JIT)
-def _as_exponents(p):
+def _as_exponents(P, k):
     """Ashikhmin–Shirley exponents and normalisation (``AshikhminShirley.__init__``)."""
-    ru = p[4]
-    rv = p[5]
+    ru = P[k, 4]
+    rv = P[k, 5]
     e_u = 2.0 / (ru * ru)
     e_v = 2.0 / (rv * rv)
     return e_u, e_v, math.sqrt((e_u + 1.0) * (e_v + 1.0)) / (2.0 * _PI)
@@ -379,12 +379,12 @@ def _as_d_cos(e_u, e_v, norm, ht, hb, hn):
 
 
 @numba.njit(**_JIT)
-def _glossy_kernel(p, wox, woy, woz, wix, wiy, wiz):
+def _glossy_kernel(P, k, wox, woy, woz, wix, wiy, wiz):
     """``MicrofacetBsdf._kernel`` in ``scatter_reflect`` mode for oriented ``wo``.
 
     Returns ``(weight_r, weight_g, weight_b, pdf, ok)``.
     """
-    tr, tg, tb = p[1], p[2], p[3]
+    tr, tg, tb = P[k, 1], P[k, 2], P[k, 3]
     # tangent_axes((1, 0, 0)): the anisotropy frame is the local frame
     tx = 1.0
     ty = 0.0
@@ -410,7 +410,7 @@ def _glossy_kernel(p, wox, woy, woz, wix, wiy, wiz):
     # distribution in the anisotropy frame (t = (tx, ty, 0), b = (ty, -tx, 0))
     ht = hx * tx + hy * ty
     hb = hx * ty - hy * tx
-    e_u, e_v, norm = _as_exponents(p)
+    e_u, e_v, norm = _as_exponents(P, k)
     d = _as_d_cos(e_u, e_v, norm, ht, hb, hn) / hn
     pdf0 = d / (4.0 * nk1)
     pdf = 1.0 * g1_1 * pdf0  # P = 1 in scatter_reflect
@@ -425,26 +425,26 @@ def _glossy_kernel(p, wox, woy, woz, wix, wiy, wiz):
 
 
 @numba.njit(**_JIT)
-def _glossy_eval_pdf(p, wox, woy, woz, wix, wiy, wiz):
+def _glossy_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     if woz < 0.0:
         woz = -woz
         wiz = -wiz
-    wr, wg, wb, pdf, ok = _glossy_kernel(p, wox, woy, woz, wix, wiy, wiz)
+    wr, wg, wb, pdf, ok = _glossy_kernel(P, k, wox, woy, woz, wix, wiy, wiz)
     if not ok:
         return 0.0, 0.0, 0.0, 0.0
     return wr * pdf, wg * pdf, wb * pdf, pdf
 
 
 @numba.njit(**_JIT)
-def _glossy_sample(p, wox, woy, woz, u1, u2x, u2y):
+def _glossy_sample(P, k, wox, woy, woz, u1, u2x, u2y):
     flip = woz < 0.0
     if flip:
         woz = -woz
-    if p[1] == 0.0 and p[2] == 0.0 and p[3] == 0.0:
+    if P[k, 1] == 0.0 and P[k, 2] == 0.0 and P[k, 3] == 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
     tx = 1.0
     ty = 0.0
-    e_u, e_v, _ = _as_exponents(p)
+    e_u, e_v, _ = _as_exponents(P, k)
     # AshikhminShirley.sample: azimuth from the quadrant formula
     q = np.floor(4.0 * u2x)
     up = 4.0 * u2x - q
@@ -490,7 +490,7 @@ def _glossy_sample(p, wox, woy, woz, u1, u2x, u2y):
     wiz = two_c * hz - woz
     if not wiz > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
-    wr, wg, wb, pdf, ok = _glossy_kernel(p, wox, woy, woz, wix, wiy, wiz)
+    wr, wg, wb, pdf, ok = _glossy_kernel(P, k, wox, woy, woz, wix, wiy, wiz)
     if not ok:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
     if flip:
@@ -502,8 +502,8 @@ def _glossy_sample(p, wox, woy, woz, u1, u2x, u2y):
 
 
 @numba.njit(**_JIT)
-def _specular_sample(p, wox, woy, woz):
-    tr, tg, tb = p[1], p[2], p[3]
+def _specular_sample(P, k, wox, woy, woz):
+    tr, tg, tb = P[k, 1], P[k, 2], P[k, 3]
     flip = woz < 0.0
     if flip:
         woz = -woz
@@ -519,13 +519,16 @@ def _specular_sample(p, wox, woy, woz):
 
 
 @numba.njit(**_JIT)
-def eval_pdf(p, wox, woy, woz, wix, wiy, wiz):
+def eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     """``Bsdf.eval`` and ``Bsdf.pdf`` of the numpy class, for one lane.
 
     Parameters
     ----------
-    p : (PARAM_WIDTH,) float64
-        A row from :func:`params_of`.
+    P : (m, PARAM_WIDTH) float64
+        Rows from :func:`params_of` or :func:`rows_of`.
+    k : int
+        The lane's row of ``P`` (a table and an index rather than a row view: a view
+        per lane costs two atomic reference-count updates in numba).
     wox, woy, woz, wix, wiy, wiz : float
         Unit directions ``wo`` (toward the viewer) and ``wi`` (toward the light) in the
         local frame (``z`` the shading normal, ``x`` along ``tangent_u``).
@@ -538,22 +541,25 @@ def eval_pdf(p, wox, woy, woz, wix, wiy, wiz):
         Solid-angle density of :func:`sample` choosing ``wi``; 0 for :data:`SPECULAR`
         and :data:`BLACK` (delta lobes are reached only by sampling).
     """
-    kind = p[0]
+    kind = P[k, 0]
     if kind == DIFFUSE_REFLECTION:
-        return _diffuse_eval_pdf(p, wox, woy, woz, wix, wiy, wiz)
+        return _diffuse_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz)
     if kind == SIMPLE_GLOSSY:
-        return _glossy_eval_pdf(p, wox, woy, woz, wix, wiy, wiz)
+        return _glossy_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz)
     return 0.0, 0.0, 0.0, 0.0
 
 
 @numba.njit(**_JIT)
-def sample(p, wox, woy, woz, u1, u2x, u2y):
+def sample(P, k, wox, woy, woz, u1, u2x, u2y):
     """``Bsdf.sample`` of the numpy class with the same random numbers, for one lane.
 
     Parameters
     ----------
-    p : (PARAM_WIDTH,) float64
-        A row from :func:`params_of`.
+    P : (m, PARAM_WIDTH) float64
+        Rows from :func:`params_of` or :func:`rows_of`.
+    k : int
+        The lane's row of ``P`` (a table and an index rather than a row view: a view
+        per lane costs two atomic reference-count updates in numba).
     wox, woy, woz : float
         Unit ``wo`` in the local frame.
     u1, u2x, u2y : float
@@ -576,13 +582,13 @@ def sample(p, wox, woy, woz, u1, u2x, u2y):
     u1 = _clamp_u(u1)
     u2x = _clamp_u(u2x)
     u2y = _clamp_u(u2y)
-    kind = p[0]
+    kind = P[k, 0]
     if kind == DIFFUSE_REFLECTION:
-        return _diffuse_sample(p, wox, woy, woz, u2x, u2y)
+        return _diffuse_sample(P, k, wox, woy, woz, u2x, u2y)
     if kind == SIMPLE_GLOSSY:
-        return _glossy_sample(p, wox, woy, woz, u1, u2x, u2y)
+        return _glossy_sample(P, k, wox, woy, woz, u1, u2x, u2y)
     if kind == SPECULAR:
-        return _specular_sample(p, wox, woy, woz)
+        return _specular_sample(P, k, wox, woy, woz)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
 
 
@@ -600,12 +606,13 @@ def eval_pdf_batch(p, wo, wi):
     f : (n, 3) float64
     pdf : (n,) float64
     """
+    P = p.reshape((1, p.size))
     n = wo.shape[0]
     f = np.zeros((n, 3))
     pdf = np.zeros(n)
     for i in range(n):
         f[i, 0], f[i, 1], f[i, 2], pdf[i] = eval_pdf(
-            p, wo[i, 0], wo[i, 1], wo[i, 2], wi[i, 0], wi[i, 1], wi[i, 2]
+            P, 0, wo[i, 0], wo[i, 1], wo[i, 2], wi[i, 0], wi[i, 1], wi[i, 2]
         )
     return f, pdf
 
@@ -628,6 +635,7 @@ def sample_batch(p, wo, u1, u2):
     weight : (n, 3) float64
     is_delta, valid : (n,) bool
     """
+    P = p.reshape((1, p.size))
     n = wo.shape[0]
     wi = np.zeros((n, 3))
     pdf = np.zeros(n)
@@ -645,5 +653,5 @@ def sample_batch(p, wo, u1, u2):
             weight[i, 2],
             is_delta[i],
             valid[i],
-        ) = sample(p, wo[i, 0], wo[i, 1], wo[i, 2], u1[i], u2[i, 0], u2[i, 1])
+        ) = sample(P, 0, wo[i, 0], wo[i, 1], wo[i, 2], u1[i], u2[i, 0], u2[i, 1])
     return wi, pdf, weight, is_delta, valid

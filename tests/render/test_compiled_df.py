@@ -229,11 +229,13 @@ def test_scalar_interface():
     """The per-lane kernels, called as the integrator calls them."""
     p = C.params_of(df.diffuse_reflection_bsdf(tint=0.5))
     s = np.sqrt(0.5)
-    f_r, f_g, f_b, pdf = C.eval_pdf(p, 0.0, 0.0, 1.0, s, 0.0, s)
+    f_r, f_g, f_b, pdf = C.eval_pdf(p[None], 0, 0.0, 0.0, 1.0, s, 0.0, s)
     assert (f_r, f_g, f_b) == (0.5 * pdf,) * 3 and pdf == s / np.pi
-    out = C.sample(C.params_of(df.specular_bsdf(tint=COLOR)), 0.6, 0.0, -0.8, 0.3, 0.1, 0.9)
+    mirror = C.params_of(df.specular_bsdf(tint=COLOR))[None]
+    out = C.sample(mirror, 0, 0.6, 0.0, -0.8, 0.3, 0.1, 0.9)
     assert out == (-0.6, -0.0, -0.8, 1.0, *COLOR, True, True)
-    assert C.sample(np.zeros(C.PARAM_WIDTH), 0.0, 0.0, 1.0, 0.5, 0.5, 0.5)[-2:] == (False, False)
+    black = np.zeros((1, C.PARAM_WIDTH))
+    assert C.sample(black, 0, 0.0, 0.0, 1.0, 0.5, 0.5, 0.5)[-2:] == (False, False)
 
 
 # --- hypothesis: parameters and directions -----------------------------------------------------
