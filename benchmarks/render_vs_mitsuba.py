@@ -11,6 +11,8 @@ glossy objects.  For each it measures
   our BVH build are excluded).  Mitsuba renders the very triangles we trace (our
   tessellation, vertex normals included), and, for scale, its analytic sphere and
   rectangles;
+* ours with the compiled kernels (:mod:`render.compiled`, the default for these scenes)
+  and with the general numpy path, which renders the same image;
 * the share of our render time spent inside Embree (``scene.run``), and the **Embree
   ceiling**: every ray of our timed render recorded and traced again through embreex
   alone, on two threads, with no shading at all: the samples per second no tracer
@@ -270,6 +272,10 @@ def main(argv=None) -> int:
         film = integ.render(spp=args.spp, progress=False, threads=THREADS)
         geometry.embree = log.embree
         ours_rate = film.stats["samples_per_s"]
+        general = Integrator(ours, geometry, path="general")
+        general_rate = general.render(spp=args.spp, progress=False, threads=THREADS).stats[
+            "samples_per_s"
+        ]
         ceiling = pixels * args.spp / log.replay(THREADS)
         rays_per_sample = log.rays / (pixels * args.spp)
         del log
@@ -288,6 +294,7 @@ def main(argv=None) -> int:
                 kind,
                 f"{rays_per_sample:.2f}",
                 f"{ours_rate / 1e6:.3f}",
+                f"{general_rate / 1e6:.3f}",
                 f"{ceiling / 1e6:.2f}",
                 f"{mi_rate / 1e6:.2f}",
                 f"{mi_analytic_rate / 1e6:.2f}",
@@ -305,6 +312,7 @@ def main(argv=None) -> int:
         "scene",
         "rays/sample",
         "ours Msamples/s",
+        "ours, general path",
         "Embree ceiling",
         "Mitsuba, same triangles",
         "Mitsuba, analytic shapes",
