@@ -25,6 +25,7 @@ import numpy as np
 
 from render.camera import primary_rays
 from render.compiled_df import BLACK, PARAM_WIDTH, covers, eval_pdf, params_of, rows_of, sample
+from render.film import empty_aovs
 from render.lights import INFINITE_DISTANCE, AreaLight, ConstantEnvironment
 from render.numerics import dot
 
@@ -58,8 +59,6 @@ Tables = namedtuple(
 
 def compiled_reason(integ) -> str | None:
     """Why the scene of ``integ`` cannot take the compiled path (None: it can)."""
-    if integ.aovs:
-        return "AOVs are written by the general path"
     if integ.media or integ.cutout.any() or integ.two_faced.any() or integ.null_candidate.any():
         return "volumes, cutouts, thin-walled backfaces and null interfaces need the general path"
     for obj in integ.objects:
@@ -177,10 +176,13 @@ class CompiledTrace:
         prev_pdf = np.zeros(n)
         prev_delta = np.ones(n, dtype=bool)
         offset = integ.geo.face_offset
+        aov = empty_aovs(n) if integ.aovs else None
         while len(ids):
             hit = integ._intersect(o, d)
             prim = hit["primID"]
             face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
+            if aov is not None and len(ids) == n:  # camera rays: first hits
+                self._first_hit_aovs(aov, face, hit, d)
             m = int(np.count_nonzero(prim >= 0))
             lane_row, params, lane_normal = self._varying_rows(face, hit, d)
             # the general path's draws, in its order, for the lanes that hit a surface
@@ -217,7 +219,25 @@ class CompiledTrace:
                 )
                 _add_unblocked(L, s_id[:n_shadow], s_c[:n_shadow], blocked)
             o, d, ids, beta, depth, prev_pdf, prev_delta = (a[:n_next] for a in nxt)
-        return L, alpha, {}
+        return L, alpha, {} if aov is None else {a: aov[a] for a in integ.aovs}
+
+    def _first_hit_aovs(self, aov: dict, face, hit, d) -> None:
+        """AOVs of the camera rays' hits, shaded as the general path shades them (numpy;
+        only when AOVs are asked for)."""
+        integ = self.integ
+        lanes = np.flatnonzero(face >= 0)
+        objs = integ.geo.face_object[face[lanes]]
+        for k in np.unique(objs):
+            sel = lanes[objs == k]
+            f = face[sel]
+            p, ns, tu, tv, uv = integ._attributes(
+                f, hit["u"][sel].astype(np.float64), hit["v"][sel].astype(np.float64)
+            )
+            front = dot(-d[sel], integ.geo.face_normal[f]) > 0
+            sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+            nw = ns if sh.normal_world is None else sh.normal_world
+            wo = integ._frame(k, sh, ns, tu).to_local(-d[sel])
+            integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
 
     def _varying_rows(self, face, hit, d):
         """Parameter rows and shading normals of the lanes that hit varying objects, by

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Film", "AOVS", "linear_to_srgb", "read_exr"]
+__all__ = ["Film", "AOVS", "empty_aovs", "linear_to_srgb", "read_exr"]
 
 #: the AOVs a film can keep, and their channel names in the EXR.
 AOVS = {
@@ -241,3 +241,15 @@ def read_exr(path) -> dict[str, np.ndarray]:
         keys = [k for k in "RGBA" if k in out]
         out["RGBA" if "A" in out else "RGB"] = np.stack([out[k] for k in keys], axis=-1)
     return out
+
+
+def empty_aovs(n: int) -> dict:
+    """Every AOV layer (:data:`AOVS`) for ``n`` samples before any hit; the tracers fill
+    them at first hits (:meth:`render.integrator.Integrator.write_aovs`)."""
+    return {
+        "albedo": np.zeros((n, 3)),
+        "normal": np.zeros((n, 3)),
+        "depth": np.zeros(n),
+        "uv": np.zeros((n, 2)),
+        "object_id": np.full(n, -1, dtype=np.int32),
+    }

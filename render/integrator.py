@@ -64,7 +64,7 @@ from render.bsdf import Lobe
 from render.camera import primary_rays
 from render.compiled import CompiledTrace, compiled_reason
 from render.df import albedo_estimate
-from render.film import Film
+from render.film import Film, empty_aovs
 from render.frame import Frame, mirror_z
 from render.lights import INFINITE_DISTANCE, AreaLight, LightSet
 from render.numerics import ONE_MINUS_EPS, dot, norm, row_any, row_max, unitize
@@ -398,6 +398,23 @@ class Integrator:
                 out[side] = self._shade(k, state.subset(side), front[side]).opacity
         return out
 
+    def write_aovs(self, aov: dict, lanes, k: int, bsdf, wo, normal, p, uv) -> None:
+        """Fill the AOVs of first opaque hits on object ``k``.
+
+        ``lanes`` (q,) are the rows of ``aov``; ``wo`` (q, 3) the local view directions,
+        ``normal`` (q, 3) the world shading normals, ``p`` (q, 3) the hit points and
+        ``uv`` (q, 2) their texture coordinates; ``bsdf`` is the bound bsdf (or None).
+        """
+        if "albedo" in self.aovs and bsdf is not None:
+            aov["albedo"][lanes] = albedo_estimate(bsdf, wo)
+        aov["normal"][lanes] = normal
+        aov["depth"][lanes] = dot(
+            p - np.asarray(self.camera.position, dtype=np.float64),
+            np.broadcast_to(self.camera.forward, (len(p), 3)),
+        )
+        aov["uv"][lanes] = uv
+        aov["object_id"][lanes] = k
+
     def _emitted(
         self, k: int, sh: _Shaded, frame: Frame, wo_world: np.ndarray, front=None
     ) -> np.ndarray:
@@ -699,13 +716,7 @@ class Integrator:
         o, d = primary_rays(self.camera, pixel, rng.random((n, 2)))
         L = np.zeros((n, 3))
         alpha = np.zeros(n)
-        aov = {
-            "albedo": np.zeros((n, 3)),
-            "normal": np.zeros((n, 3)),
-            "depth": np.zeros(n),
-            "uv": np.zeros((n, 2)),
-            "object_id": np.full(n, -1, dtype=np.int32),
-        }
+        aov = empty_aovs(n)
         paths = _Paths(
             ids=np.arange(n),
             o=o,
@@ -878,7 +889,6 @@ class Integrator:
         ng = geo.face_normal[face]
         wo_world = -P.d
         want = set(self.aovs)
-        cam_fwd = self.camera.forward
 
         # per-lane results of the shading groups
         passes = np.zeros(m, dtype=bool)
@@ -956,15 +966,7 @@ class Integrator:
                 lanes = ids[sel][fo]
                 alpha[lanes] = 1.0
                 if want:
-                    if "albedo" in want and sh.bsdf is not None:
-                        aov["albedo"][lanes] = albedo_estimate(sh.bsdf, wo[fo])
-                    aov["normal"][lanes] = nw[fo]
-                    aov["depth"][lanes] = dot(
-                        p[fo] - np.asarray(self.camera.position, dtype=np.float64),
-                        np.broadcast_to(cam_fwd, (int(fo.sum()), 3)),
-                    )
-                    aov["uv"][lanes] = uv[fo]
-                    aov["object_id"][lanes] = k
+                    self.write_aovs(aov, lanes, k, sh.bsdf, wo[fo], nw[fo], p[fo], uv[fo])
             bsdf = sh.bsdf
             live = opaque & can_continue[sel]
             # a null crossing adds no vertex: it is allowed at the maximum depth too
