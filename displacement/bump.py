@@ -149,6 +149,11 @@ def clamp_to_horizon(
     t_len = np.sqrt(_dot(tangential, tangential))
     has_t = t_len > 1e-12
     t = tangential / np.where(has_t, t_len, 1.0)[:, None]
+    # project once more: for n nearly opposite to reference, n - c reference cancels and
+    # keeps a component along reference of the order of rounding over t_len (Gram-Schmidt:
+    # twice is enough)
+    t = t - _dot(t, reference)[:, None] * reference
+    t = t / np.where(has_t, np.sqrt(_dot(t, t)), 1.0)[:, None]
     bent = min_cos * reference + np.sqrt(1.0 - min_cos * min_cos) * t
     bent = np.where(has_t[:, None], bent, reference)
     return np.where((c < min_cos)[:, None], bent, n)

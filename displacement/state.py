@@ -29,6 +29,10 @@ class ShadingState:
     tangent_u, tangent_v : (n, 3) float64
         ``state::texture_tangent_u(0)`` / ``texture_tangent_v(0)``: unit vectors along
         the directions of increasing u and v.
+    object_to_world : (4, 4) float64 or None
+        The object's transform (column vectors, ``M @ p``), the same for every lane, for
+        ``state::transform_point(..., coordinate_world, ...)`` and its kin; None (a
+        surface outside a scene): world space is object space.
     """
 
     position: np.ndarray
@@ -36,6 +40,7 @@ class ShadingState:
     uv: np.ndarray
     tangent_u: np.ndarray
     tangent_v: np.ndarray
+    object_to_world: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.uv)
@@ -57,5 +62,5 @@ class ShadingState:
         """Rows ``index`` of every array (a mask or integer indices)."""
         return ShadingState(
             self.position[index], self.normal[index], self.uv[index],
-            self.tangent_u[index], self.tangent_v[index],
+            self.tangent_u[index], self.tangent_v[index], self.object_to_world,
         )

@@ -314,13 +314,14 @@ class Integrator:
 
         obj = self.objects[k]
         if self.rigid_identity[k]:
-            return ShadingState(p - obj.translation, ns, uv, tu, tv)
+            return ShadingState(p - obj.translation, ns, uv, tu, tv, obj.transform)
         return ShadingState(
             obj.to_object_points(p),
             obj.to_object_normals(ns),
             uv,
             obj.to_object_vectors(tu),
             obj.to_object_vectors(tv),
+            obj.transform,
         )
 
     def _state(self, k: int, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):

@@ -6,10 +6,10 @@
 :class:`~displacement.state.ShadingState`.
 
 World space.  A :class:`ShadingState` is in object space (MDL's internal space here).
-If the state object carries an ``object_to_world`` attribute, a (4, 4) or (3, 3) matrix
-or an (n, 4, 4)/(n, 3, 3) stack acting on column vectors (``M @ p``), world positions
-and normals use it; otherwise world space is object space (identity).  The renderer may
-provide such a state (``render/state.py``).
+Its ``object_to_world``, a (4, 4) or (3, 3) matrix or an (n, 4, 4)/(n, 3, 3) stack
+acting on column vectors (``M @ p``), takes positions and normals to world space; the
+integrator sets it to each object's transform.  Without one (a surface outside a scene),
+world space is object space.
 """
 
 from __future__ import annotations

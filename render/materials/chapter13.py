@@ -123,7 +123,7 @@ def normal_as_color(normal: Float3 = (1.0, 1.0, 1.0),
     """Listing 13.18: a normal shown as diffuse colour, or (default) as emission.
 
     ``normal_color = color_from_normal(normal, normal_color_as_emission)`` (Listing
-    13.17: world space by the state's ``object_to_world`` if it has one, ``0.5 + 0.5
+    13.17: world space by the state's ``object_to_world``, ``0.5 + 0.5
     n``, divided by pi as emission); the other of tint and intensity is ``color(0.0)``.
 
     Examples

@@ -17,8 +17,8 @@ Reading notes:
 * ``uv.png`` (Figure 9.3) is not shipped with the Handbook; ``gallery/textures/uv.png``
   is made by ``gallery/textures/make_uv_texture.py``.  ``texture_2d("uv.png")`` has
   MDL's default gamma: an 8-bit PNG is sRGB-encoded colour.
-* ``space_as_color(mode: "world", ...)`` (Figure 9.8) differs from ``"object"`` only
-  where the shading state carries an ``object_to_world`` transform
+* ``space_as_color(mode: "world", ...)`` (Figure 9.8) uses the state's
+  ``object_to_world``, which the integrator sets to each object's transform
   (:func:`render.library.space.world_position`).
 """
 

@@ -310,3 +310,27 @@ def test_integrator_rejects_nothing_silently_on_empty_light_set():
     integ = Integrator(scene, scene.build())
     film = integ.render(progress=False)
     assert np.all(film.rgb() == 0.0) and film.alpha().max() == 1.0
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_world_space_is_the_objects_transform(path):
+    # Figure 9.8: space_as_color in world space differs from object space by the object's
+    # transform.  A sphere moved by t = (0.65, 0.5, 0): frac(4 (p + t)) = frac(4 p + (2.6,
+    # 2, 0)), so red shifts by 0.6 (mod 1) and green and blue stay (mod 1).
+    from render.materials.chapter9 import space_as_color
+
+    cam = Camera(position=(0.65, 0.5, 4.0), look_at=(0.65, 0.5, 0.0), width=24, height=24,
+                 fov_y_deg=16)
+
+    def albedo(mode, transform):
+        scene = Scene(cam, [SceneObject(UVSphere(0.5), space_as_color(mode, 4.0), transform)],
+                      [ConstantEnvironment(1.0)], RenderSettings(24, 24, spp=1, max_depth=1))
+        film = render(scene, progress=False, aovs=["albedo"], path=path)
+        return film.aov("albedo")[film.alpha() > 0]
+
+    moved = make_transform(translate=(0.65, 0.5, 0.0))
+    obj, world = albedo("object", moved), albedo("world", moved)
+    assert len(obj) > 200
+    gap = np.abs(world - np.mod(obj + [0.6, 0.0, 0.0], 1.0))
+    assert np.all(np.minimum(gap, 1.0 - gap) < 1e-9)  # on the circle: 0.9999... ~ 0
+    assert np.abs(world[:, 0] - obj[:, 0]).max() > 0.5

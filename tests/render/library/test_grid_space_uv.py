@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -30,18 +32,9 @@ def square(uv) -> ShadingState:
     return UnitSquare().state_at_uv(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
 
 
-class WorldState:
-    """A state that also carries an object-to-world matrix (as render/state.py may)."""
-
-    def __init__(self, state, matrix):
-        self._state = state
-        self.object_to_world = matrix
-
-    def __getattr__(self, name):
-        return getattr(self._state, name)
-
-    def __len__(self):
-        return len(self._state)
+def in_world(state, matrix):
+    """``state`` with its ``object_to_world`` set (as the integrator sets it)."""
+    return dataclasses.replace(state, object_to_world=matrix)
 
 
 # --- grid --------------------------------------------------------------------------
@@ -106,18 +99,18 @@ def test_positions_in_three_spaces():
     assert position(s, "object").tolist() == [[0.25, 0.75, 0.0]]
     assert position(s, "functions::world").tolist() == [[0.25, 0.75, 0.0]]
     m = np.array([[2.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 2.0], [0.0, 0.0, 1.0, 3.0], [0, 0, 0, 1.0]])
-    w = WorldState(s, m)
+    w = in_world(s, m)
     assert world_position(w).tolist() == [[1.5, 2.75, 3.0]]
     assert position(w, "world").tolist() == [[1.5, 2.75, 3.0]]
     assert position(w, "object").tolist() == [[0.25, 0.75, 0.0]]
     # normals by the inverse transpose: the x component halves
     assert world_normal(w, np.array([[1.0, 0.0, 0.0]])).tolist() == [[0.5, 0.0, 0.0]]
-    per_lane = WorldState(s, m[None, :3, :3])
+    per_lane = in_world(s, m[None, :3, :3])
     assert world_position(per_lane).tolist() == [[0.5, 0.75, 0.0]]
     with pytest.raises(ValueError, match="singular"):
-        world_normal(WorldState(s, np.zeros((3, 3))), np.array([[1.0, 0.0, 0.0]]))
+        world_normal(in_world(s, np.zeros((3, 3))), np.array([[1.0, 0.0, 0.0]]))
     with pytest.raises(ValueError, match="object_to_world must be"):
-        world_position(WorldState(s, np.eye(2)))
+        world_position(in_world(s, np.eye(2)))
 
 
 def test_position_to_color_wraps_negative_coordinates():
