@@ -2,18 +2,21 @@
 
 The general integrator (:mod:`render.integrator`) shades a wavefront with numpy passes
 over a material tree; on the Handbook stage almost all of its time goes to those passes
-and not to Embree.  When every material of a scene is a single elemental bsdf with
-constant arguments (:func:`render.compiled_df.params_of`), perhaps with constant
-``diffuse_edf`` emission, and nothing else the general path handles (no bump, cutout,
-volume, thin-walled backface or AOVs; the lights are emissive objects and at most a
-constant environment), :class:`CompiledTrace` runs each bounce as one compiled loop over
-the lanes instead.
+and not to Embree.  :class:`CompiledTrace` runs each bounce as one compiled loop over
+the lanes instead, where the scene allows it (:func:`compiled_reason`): every material's
+bsdf is one elemental df the kernels model (:func:`render.compiled_df.covers`), with
+constant arguments or arguments that vary over the surface, perhaps a bumped normal and
+constant ``diffuse_edf`` emission; no volume, cutout, thin-walled backface or null
+interface; the lights are emissive objects and at most a constant environment.
+Varying arguments and normals are evaluated by ``material.shade`` (numpy) per object
+and bounce, and the kernels take them per lane; AOVs are written from the general
+path's own shading of the camera rays' hits.
 
 It is the same algorithm, lane for lane: the same random numbers drawn in the same
 order, the same light choice, MIS weights, Russian roulette, ray offsets and shadow-ray
 aims, and Embree (embreex) still traces every ray in batches.  The tests hold its images
-equal to the general path's with the same seed.  Displaced objects qualify (their
-triangles are diced before rendering).
+and AOVs equal to the general path's with the same seed.  Displaced objects qualify
+(their triangles are diced before rendering).
 """
 
 from __future__ import annotations
@@ -177,12 +180,14 @@ class CompiledTrace:
         prev_delta = np.ones(n, dtype=bool)
         offset = integ.geo.face_offset
         aov = empty_aovs(n) if integ.aovs else None
+        camera_rays = True
         while len(ids):
             hit = integ._intersect(o, d)
             prim = hit["primID"]
             face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
-            if aov is not None and len(ids) == n:  # camera rays: first hits
+            if aov is not None and camera_rays:
                 self._first_hit_aovs(aov, face, hit, d)
+            camera_rays = False
             m = int(np.count_nonzero(prim >= 0))
             lane_row, params, lane_normal = self._varying_rows(face, hit, d)
             # the general path's draws, in its order, for the lanes that hit a surface
@@ -221,35 +226,39 @@ class CompiledTrace:
             o, d, ids, beta, depth, prev_pdf, prev_delta = (a[:n_next] for a in nxt)
         return L, alpha, {} if aov is None else {a: aov[a] for a in integ.aovs}
 
-    def _first_hit_aovs(self, aov: dict, face, hit, d) -> None:
-        """AOVs of the camera rays' hits, shaded as the general path shades them (numpy;
-        only when AOVs are asked for)."""
+    def _shade(self, k: int, lanes, face, hit, d):
+        """``material.shade`` of object ``k`` at the hits of ``lanes``, as the general path
+        shades them: (Shading, world position, interpolated normal and tangent, uv)."""
         integ = self.integ
+        f = face[lanes]
+        p, ns, tu, tv, uv = integ._attributes(
+            f, hit["u"][lanes].astype(np.float64), hit["v"][lanes].astype(np.float64)
+        )
+        front = dot(-d[lanes], integ.geo.face_normal[f]) > 0
+        sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+        return sh, p, ns, tu, uv
+
+    def _first_hit_aovs(self, aov: dict, face, hit, d) -> None:
+        """AOVs of the camera rays' hits, from the general path's shading (numpy; only
+        when AOVs are asked for)."""
         lanes = np.flatnonzero(face >= 0)
-        objs = integ.geo.face_object[face[lanes]]
+        objs = self.integ.geo.face_object[face[lanes]]
         for k in np.unique(objs):
             sel = lanes[objs == k]
-            f = face[sel]
-            p, ns, tu, tv, uv = integ._attributes(
-                f, hit["u"][sel].astype(np.float64), hit["v"][sel].astype(np.float64)
-            )
-            front = dot(-d[sel], integ.geo.face_normal[f]) > 0
-            sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+            sh, p, ns, tu, uv = self._shade(k, sel, face, hit, d)
             nw = ns if sh.normal_world is None else sh.normal_world
-            wo = integ._frame(k, sh, ns, tu).to_local(-d[sel])
-            integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
+            wo = self.integ._frame(k, sh, ns, tu).to_local(-d[sel])
+            self.integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
 
     def _varying_rows(self, face, hit, d):
-        """Parameter rows and shading normals of the lanes that hit varying objects, by
-        ``material.shade`` over each object's lanes (the general path's shading).
+        """Parameter rows and shading normals of the lanes that hit varying objects.
 
         Returns ``lane_row`` (m,), ``params`` (k + q, PARAM_WIDTH): the objects' rows, then
         one per varying lane, and ``normals`` (q, 3): lane ``i`` takes row
         ``k + lane_row[i]`` and normal ``lane_row[i]``, or its object's row where
         ``lane_row[i] = -1``."""
-        integ = self.integ
         lane_row = np.full(len(face), -1, dtype=np.int64)
-        hit_objects = integ.geo.face_object[np.maximum(face, 0)]
+        hit_objects = self.integ.geo.face_object[np.maximum(face, 0)]
         lanes = np.flatnonzero((face >= 0) & self.varying[hit_objects])
         if len(lanes) == 0:
             return lane_row, self.tables.params, np.zeros((0, 3))
@@ -258,12 +267,7 @@ class CompiledTrace:
         objs = hit_objects[lanes]
         for k in np.unique(objs):
             sel = np.flatnonzero(objs == k)
-            f = face[lanes[sel]]
-            p, ns, tu, tv, uv = integ._attributes(
-                f, hit["u"][lanes[sel]].astype(np.float64), hit["v"][lanes[sel]].astype(np.float64)
-            )
-            front = dot(-d[lanes[sel]], integ.geo.face_normal[f]) > 0
-            sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+            sh, _, ns, _, _ = self._shade(k, lanes[sel], face, hit, d)
             params[sel] = rows_of(sh.bsdf, len(sel))
             normals[sel] = ns if sh.normal_world is None else sh.normal_world
         lane_row[lanes] = np.arange(len(lanes))

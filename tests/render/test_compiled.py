@@ -209,3 +209,23 @@ def test_the_general_path_keeps_what_the_kernels_do_not_model(change, reason):
     with pytest.raises(ValueError, match="compiled"):
         Integrator(scene, scene.build(), path="compiled")
     assert render(scene, progress=False).stats["path"] == "general"
+
+
+def test_aovs_come_from_the_camera_rays_in_a_closed_room():
+    # inside a white, glowing sphere every path goes on after its first hit, so the next
+    # segment has as many lanes as the camera had: the AOVs are still the first hits'
+    glow = M.material(surface=M.material_surface(
+        D.diffuse_reflection_bsdf(tint=1.0),
+        M.material_emission(D.diffuse_edf(), intensity=(1.0, 1.0, 1.0))))
+    room = SceneObject(UVSphere(2.0), glow, name="room", resolution=(32, 16))
+    cam = Camera(position=(0.3, 0.2, 0.5), look_at=(0.0, 0.0, -1.0), width=12, height=10,
+                 fov_y_deg=60)
+    scene = Scene(cam, [room], [], RenderSettings(12, 10, spp=2, max_depth=4, rr_depth=10))
+    geo = scene.build()
+    aovs = ["depth", "uv", "normal"]
+    general = Integrator(scene, geo, aovs, path="general").render(progress=False)
+    compiled = Integrator(scene, geo, aovs, path="compiled").render(progress=False)
+    assert_same_image(general, compiled)
+    for name in aovs:
+        assert np.array_equal(general.aov(name), compiled.aov(name)), name
+    assert compiled.aov("depth").min() > 0.5  # the wall, seen from inside
