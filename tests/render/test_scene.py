@@ -295,6 +295,27 @@ def test_pwc_render_end_to_end(tmp_path, capsys):
     assert np.array_equal(read_exr(exr2)["RGBA"], ch["RGBA"])
 
 
+def test_pwc_render_path_option(tmp_path, capsys):
+    # the compiled and the general path give the same image; the summary says which ran
+    (tmp_path / "stage.toml").write_text(STAGE)
+    out = {}
+    for path in ("compiled", "general"):
+        exr = tmp_path / f"{path}.exr"
+        assert main(["render", str(tmp_path / "stage.toml"), "-o", str(exr), "--path", path]) == 0
+        out[path] = read_exr(exr)["RGBA"]
+        summary = capsys.readouterr().err
+        assert f"{path} path" in summary or f"{path}: asked for" in summary, summary
+    assert np.allclose(out["compiled"], out["general"], rtol=1e-6, atol=1e-9)
+    # a point light is not modelled by the kernels: asking for them is a clear error
+    lit = STAGE + '\n[[lights]]\ntype = "point"\nposition = [0.0, 2.0, 0.0]\nintensity = 1.0\n'
+    (tmp_path / "lit.toml").write_text(lit)
+    status = main(["render", str(tmp_path / "lit.toml"), "-o", str(tmp_path / "x.exr"),
+                   "--path", "compiled", "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 1 and "compiled path cannot render this scene" in err
+    assert "PointLight" in err and "Traceback" not in err
+
+
 def test_pwc_render_errors_are_messages_not_tracebacks(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(STAGE.replace("glossy(tint", "glosy(tint"))
