@@ -1,5 +1,10 @@
 """The wavefront path tracer: batches of rays through Embree, shading vectorized per object.
 
+Scenes whose materials the compiled kernels model (:func:`render.compiled.compiled_reason`)
+run the same algorithm, with the same random numbers and the same image, in
+:class:`render.compiled.CompiledTrace` (numba), about three times faster; this module is
+the general path for every material, and the reference.
+
 Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` integrators):
 
 * primary rays through random points of each pixel (box filter);
