@@ -229,3 +229,19 @@ def test_aovs_come_from_the_camera_rays_in_a_closed_room():
     for name in aovs:
         assert np.array_equal(general.aov(name), compiled.aov(name)), name
     assert compiled.aov("depth").min() > 0.5  # the wall, seen from inside
+
+
+@pytest.mark.parametrize("material", [
+    surface(D.simple_glossy_bsdf(roughness_u=0.05, roughness_v=0.5, tint=0.8)),
+    surface(D.diffuse_reflection_bsdf(tint=tinted_by_uv),
+            geometry=M.material_geometry(normal=bumped)),
+], ids=["anisotropic", "textured-bumped"])
+def test_same_image_with_a_rotated_stretched_object(material):
+    # an ellipsoid (scale 0.6, 1.2, 0.9, turned about two axes): object and world frames
+    # differ, so normals and tangents go through the object's transform and back
+    scene = stage(D.diffuse_reflection_bsdf())
+    scene.objects[1] = SceneObject(
+        UVSphere(0.5), material,
+        make_transform(translate=(0, 0.6, 0), rotate=(30, 50, 0), scale=(0.6, 1.2, 0.9)),
+        name="ellipsoid", resolution=(64, 32))
+    assert_same_image(*both(scene))
