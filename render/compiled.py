@@ -7,7 +7,8 @@ the lanes instead, where the scene allows it (:func:`compiled_reason`): every ma
 bsdf is one elemental df the kernels model (:func:`render.compiled_df.covers`), with
 constant arguments or arguments that vary over the surface, perhaps a bumped normal and
 constant ``diffuse_edf`` emission; no volume, cutout, thin-walled backface or null
-interface; the lights are emissive objects and at most a constant environment.
+interface; the lights are emissive objects, point, spot and directional lights and at
+most a constant environment.
 Varying arguments and normals are evaluated by ``material.shade`` (numpy) per object
 and bounce, and the kernels take them per lane; AOVs are written from the general
 path's own shading of the camera rays' hits.
@@ -29,12 +30,28 @@ import numpy as np
 from render.camera import primary_rays
 from render.compiled_df import BLACK, PARAM_WIDTH, covers, eval_pdf, params_of, rows_of, sample
 from render.film import empty_aovs
-from render.lights import INFINITE_DISTANCE, AreaLight, ConstantEnvironment
+from render.lights import (
+    INFINITE_DISTANCE,
+    AreaLight,
+    ConstantEnvironment,
+    DirectionalLight,
+    PointLight,
+    SpotLight,
+)
 from render.numerics import dot
 
 __all__ = ["CompiledTrace", "compiled_reason"]
 
 INV_PI = 1.0 / np.pi
+
+#: ``Tables.light_kind``: the lights the kernels sample
+AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL = 0, 1, 2, 3, 4
+_KINDS = {
+    ConstantEnvironment: ENVIRONMENT,
+    PointLight: POINT,
+    SpotLight: SPOT,
+    DirectionalLight: DIRECTIONAL,
+}
 
 #: Scene tables of the kernels (float64 unless noted).
 Tables = namedtuple(
@@ -48,7 +65,9 @@ Tables = namedtuple(
         "emit_hit",  # (k, 3) radiance seen when a path hits object k (front side)
         "emit_light",  # (k, 3) radiance of object k's light samples (front side)
         "area_pdf",  # (k,) light-selection probability / area
-        "light_object",  # (l,) int64 object of each light, -1 for the environment
+        "light_kind",  # (l,) int64 AREA, ENVIRONMENT, POINT, SPOT or DIRECTIONAL
+        "light_object",  # (l,) int64 object of each area light, -1 for the others
+        "light_params",  # (l, 11) position, direction, intensity, cos cutoff, cos width
         "light_first",  # (l + 1,) int64 range of each light's triangles in light_faces
         "light_faces",  # (t,) int64 emissive triangles
         "light_cdf",  # (t,) area cdf within each light
@@ -74,7 +93,7 @@ def compiled_reason(integ) -> str | None:
                 _constant_emission(integ, light.object_id) is None
             ):
                 return "emission that is not a constant diffuse_edf needs the general path"
-        elif not isinstance(light, ConstantEnvironment):
+        elif type(light) not in _KINDS:
             return f"{type(light).__name__} needs the general path"
     return None
 
@@ -123,20 +142,32 @@ class CompiledTrace:
                 emit_hit[k] = INV_PI * (intensity / light.area if power else intensity)
                 emit_light[k] = radiance / integ._object_area(k) if power else radiance
         lights = integ.lights.lights
+        light_kind = np.array([_KINDS.get(type(light), AREA) for light in lights], dtype=np.int64)
         light_object = np.full(len(lights), -1, dtype=np.int64)
+        light_params = np.zeros((len(lights), 11))
         light_first = np.zeros(len(lights) + 1, dtype=np.int64)
         faces, cdf, corners, pdf_area = [], [], [], np.zeros(len(lights))
         env = np.zeros(3)
         for j, light in enumerate(lights):
-            if isinstance(light, AreaLight):
+            kind = light_kind[j]
+            if kind == AREA:
                 light_object[j] = light.object_id
                 faces.append(light.faces)
                 cdf.append(light._cdf)
                 corners.append(light.corners)
                 pdf_area[j] = light.pdf_area
-            else:
+            elif kind == ENVIRONMENT:
                 env = np.asarray(light.radiance, dtype=np.float64)
-            light_first[j + 1] = light_first[j] + (len(light.faces) if light_object[j] >= 0 else 0)
+            elif kind == DIRECTIONAL:
+                light_params[j, 3:6] = light.direction
+                light_params[j, 6:9] = light.irradiance
+            else:
+                light_params[j, 0:3] = light.position
+                light_params[j, 6:9] = light.intensity
+                if kind == SPOT:
+                    light_params[j, 3:6] = light.direction
+                    light_params[j, 9:11] = light.cos_cutoff, light.cos_width
+            light_first[j + 1] = light_first[j] + (len(light.faces) if kind == AREA else 0)
         self.integ = integ
         self.tables = Tables(
             geo.packed,
@@ -147,7 +178,9 @@ class CompiledTrace:
             emit_hit,
             emit_light,
             np.asarray(integ.area_pdf, dtype=np.float64),
+            light_kind,
             light_object,
+            light_params,
             light_first,
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
@@ -332,7 +365,9 @@ def _sample_light(
     light_corners,
     light_faces,
     light_pdf_area,
+    light_kind,
     light_object,
+    light_params,
     emit_light,
     face_normal,
     env,
@@ -344,12 +379,14 @@ def _sample_light(
     u1,
     u2,
 ):
-    """LightSet.sample_li of light ``j`` at p: (wi xyz, distance, radiance rgb, pdf).
+    """LightSet.sample_li of light ``j`` at p: (wi xyz, distance, radiance rgb, pdf,
+    delta); ``pdf`` includes the selection probability (delta lights: it alone).
 
     Takes the arrays of :data:`Tables` one by one and indexes them in place: an array
     taken out of a tuple, or a row view, costs numba two atomic reference-count updates,
     which in a per-lane loop cost more than the shading."""
-    if light_object[j] < 0:  # constant environment: uniform sphere
+    kind = light_kind[j]
+    if kind == ENVIRONMENT:  # constant environment: uniform sphere
         z = 1.0 - 2.0 * u1
         r = 2.0 * np.sqrt(max(u1 * (1.0 - u1), 0.0))
         phi = 2.0 * np.pi * u2
@@ -362,6 +399,47 @@ def _sample_light(
             env[1],
             env[2],
             0.25 / np.pi * select,
+            False,
+        )
+    lp = light_params
+    if kind == DIRECTIONAL:
+        return (
+            -lp[j, 3],
+            -lp[j, 4],
+            -lp[j, 5],
+            INFINITE_DISTANCE,
+            lp[j, 6],
+            lp[j, 7],
+            lp[j, 8],
+            select,
+            True,
+        )
+    if kind != AREA:  # PointLight._towards, then SpotLight's smoothstep falloff
+        dx, dy, dz = lp[j, 0] - px, lp[j, 1] - py, lp[j, 2] - pz
+        dist = np.sqrt(dx * dx + dy * dy + dz * dz)
+        wx, wy, wz, ok = _unitize(dx, dy, dz)
+        if not (ok and dist > 0.0):
+            return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, True
+        scale = 1.0 / (dist * dist)
+        if kind == SPOT:
+            c = _dot(-wx, -wy, -wz, lp[j, 3], lp[j, 4], lp[j, 5])
+            span = lp[j, 10] - lp[j, 9]
+            if span <= 0.0:
+                falloff = 1.0 if c >= lp[j, 9] else 0.0
+            else:
+                t = min(max((c - lp[j, 9]) / span, 0.0), 1.0)
+                falloff = t * t * (3.0 - 2.0 * t)
+            scale = scale * falloff
+        return (
+            wx,
+            wy,
+            wz,
+            dist,
+            scale * lp[j, 6],
+            scale * lp[j, 7],
+            scale * lp[j, 8],
+            select,
+            True,
         )
     a, b = light_first[j], light_first[j + 1]
     # np.searchsorted(cdf, u1, side="right") over this light's triangles, clipped
@@ -391,13 +469,13 @@ def _sample_light(
     gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
     cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
     if not (ok and dist > 0.0 and cos_l > 1e-12):
-        return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0
+        return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, False
     pdf = dist * dist / cos_l * light_pdf_area[j] * select
     obj = light_object[j]
     if _dot(-wx, -wy, -wz, gx, gy, gz) > 0.0:  # emitters light their front side
         e = emit_light
-        return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf
-    return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf
+        return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf, False
+    return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False
 
 
 @numba.njit(nogil=True, cache=True)
@@ -437,7 +515,9 @@ def _bounce(
         emit_hit,
         emit_light,
         area_pdf,
+        light_kind,
         light_object,
+        light_params,
         light_first,
         light_faces,
         light_cdf,
@@ -524,13 +604,15 @@ def _bounce(
             continue
         # next-event estimation
         j = min(int(u_light[r, 0] * n_lights), n_lights - 1)
-        lx, ly, lz, ldist, l0, l1, l2, lpdf = _sample_light(
+        lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta = _sample_light(
             light_first,
             light_cdf,
             light_corners,
             light_faces,
             light_pdf_area,
+            light_kind,
             light_object,
+            light_params,
             emit_light,
             face_normal,
             env,
@@ -548,7 +630,7 @@ def _bounce(
         f0, f1, f2, pb = eval_pdf(params, row, wox, woy, woz, wlx, wly, wlz)
         g_wi = _dot(lx, ly, lz, gx, gy, gz)
         if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
-            w = _power(lpdf, pb) / lpdf
+            w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf
             c0, c1, c2 = (
                 beta[i, 0] * f0 * l0 * w,
                 beta[i, 1] * f1 * l1 * w,

@@ -11,7 +11,13 @@ from render import material as M
 from render.camera import Camera
 from render.compiled import compiled_reason
 from render.integrator import Integrator, render
-from render.lights import ConstantEnvironment, PointLight
+from render.lights import (
+    ConstantEnvironment,
+    DirectionalLight,
+    LatLongEnvironment,
+    PointLight,
+    SpotLight,
+)
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
 
 D = M.df
@@ -85,6 +91,30 @@ def test_same_image_as_the_general_path(name):
     scene = stage(CASES[name])
     assert compiled_reason(Integrator(scene, scene.build())) is None
     assert_same_image(*both(scene))
+
+
+@pytest.mark.parametrize(
+    "light",
+    [
+        PointLight(position=(0.3, 1.8, 0.9), intensity=2.0),
+        SpotLight(position=(-0.5, 2.0, 1.0), direction=(0.3, -1.0, -0.5), intensity=4.0,
+                  cutoff_angle=25.0, beam_width=15.0),
+        SpotLight(position=(0.5, 2.0, 1.0), direction=(0.0, -1.0, 0.0), intensity=4.0,
+                  cutoff_angle=20.0, beam_width=20.0),  # hard edge: no falloff band
+        DirectionalLight(direction=(0.4, -1.0, -0.3), irradiance=1.5),
+    ],
+    ids=["point", "spot", "spot-hard-edge", "directional"],
+)
+def test_same_image_with_delta_lights(light):
+    # delta lights take no MIS (their pdf is the selection probability alone)
+    scene = stage(D.simple_glossy_bsdf(roughness_u=0.25, tint=(0.7, 0.5, 0.2)))
+    scene.lights.append(light)
+    assert_same_image(*both(scene))
+    alone = stage(D.diffuse_reflection_bsdf(tint=0.8), env=0.0, lights=())
+    alone.lights.append(light)
+    general, compiled = both(alone)
+    assert_same_image(general, compiled)
+    assert compiled.rgb().max() > 0.0
 
 
 @pytest.mark.parametrize(
@@ -164,9 +194,10 @@ def test_same_image_with_arguments_that_vary_over_the_surface(material):
 def test_auto_takes_the_compiled_path_only_where_it_can():
     scene = stage(D.diffuse_reflection_bsdf(tint=0.5), size=(16, 12), spp=1)
     assert render(scene, progress=False).stats["path"] == "compiled"
-    scene.lights.append(PointLight(position=(0, 2, 0), intensity=1.0))
+    scene.lights[0] = LatLongEnvironment(np.ones((4, 8, 3)))
     film = render(scene, progress=False)
-    assert film.stats["path"] == "general" and "PointLight" in film.stats["general_reason"]
+    assert film.stats["path"] == "general"
+    assert "LatLongEnvironment" in film.stats["general_reason"]
 
 
 @pytest.mark.parametrize("bsdf", [CASES["glossy-anisotropic"], CASES["oren-nayar+multiscatter"]],
@@ -193,17 +224,17 @@ def test_same_aovs_as_the_general_path(bsdf):
         (dict(bsdf=D.weighted_layer(weight=0.5, layer=D.specular_bsdf(),
                                     base=D.diffuse_reflection_bsdf())), "elemental"),
         (dict(geometry=M.material_geometry(cutout_opacity=0.5)), "cutout"),
-        (dict(point=True), "PointLight"),
+        (dict(envmap=True), "LatLongEnvironment"),
     ],
-    ids=["transmit-mode", "layer", "cutout", "point-light"],
+    ids=["transmit-mode", "layer", "cutout", "environment-map"],
 )
 def test_the_general_path_keeps_what_the_kernels_do_not_model(change, reason):
     bsdf = change.get("bsdf", D.diffuse_reflection_bsdf())
     mat = surface(bsdf, **({"geometry": change["geometry"]} if "geometry" in change else {}))
     scene = stage(bsdf, size=(8, 6), spp=1)
     scene.objects[1] = SceneObject(UVSphere(0.5), mat, name="sphere", resolution=(16, 8))
-    if change.get("point"):
-        scene.lights.append(PointLight(position=(0, 2, 0), intensity=1.0))
+    if change.get("envmap"):
+        scene.lights[0] = LatLongEnvironment(np.ones((4, 8, 3)))
     why = compiled_reason(Integrator(scene, scene.build()))
     assert why is not None and reason.lower() in why.lower(), why
     with pytest.raises(ValueError, match="compiled"):

@@ -306,14 +306,16 @@ def test_pwc_render_path_option(tmp_path, capsys):
         summary = capsys.readouterr().err
         assert f"{path} path" in summary or f"{path}: asked for" in summary, summary
     assert np.allclose(out["compiled"], out["general"], rtol=1e-6, atol=1e-9)
-    # a point light is not modelled by the kernels: asking for them is a clear error
-    lit = STAGE + '\n[[lights]]\ntype = "point"\nposition = [0.0, 2.0, 0.0]\nintensity = 1.0\n'
+    # the sky is not modelled by the kernels: asking for them is a clear error
+    lit = STAGE.replace('type = "environment"\nradiance = 0.1',
+                        'type = "sun_and_sky"\nelevation = 40.0\nazimuth = 30.0')
+    assert lit != STAGE
     (tmp_path / "lit.toml").write_text(lit)
     status = main(["render", str(tmp_path / "lit.toml"), "-o", str(tmp_path / "x.exr"),
                    "--path", "compiled", "--quiet"])
     err = capsys.readouterr().err
     assert status == 1 and "compiled path cannot render this scene" in err
-    assert "PointLight" in err and "Traceback" not in err
+    assert "SunAndSky" in err and "Traceback" not in err
 
 
 def test_pwc_render_errors_are_messages_not_tracebacks(tmp_path, capsys):
