@@ -7,8 +7,8 @@ the lanes instead, where the scene allows it (:func:`compiled_reason`): every ma
 bsdf is one elemental df the kernels model (:func:`render.compiled_df.covers`), with
 constant arguments or arguments that vary over the surface, perhaps a bumped normal and
 constant ``diffuse_edf`` emission; no volume, cutout, thin-walled backface or null
-interface; the lights are emissive objects, point, spot and directional lights and at
-most a constant environment.
+interface; the lights are emissive objects, point, spot and directional lights and an
+environment (constant or a latitude-longitude map).
 Varying arguments and normals are evaluated by ``material.shade`` (numpy) per object
 and bounce, and the kernels take them per lane; AOVs are written from the general
 path's own shading of the camera rays' hits.
@@ -35,6 +35,7 @@ from render.lights import (
     AreaLight,
     ConstantEnvironment,
     DirectionalLight,
+    LatLongEnvironment,
     PointLight,
     SpotLight,
 )
@@ -45,12 +46,13 @@ __all__ = ["CompiledTrace", "compiled_reason"]
 INV_PI = 1.0 / np.pi
 
 #: ``Tables.light_kind``: the lights the kernels sample
-AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL = 0, 1, 2, 3, 4
+AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP = 0, 1, 2, 3, 4, 5
 _KINDS = {
     ConstantEnvironment: ENVIRONMENT,
     PointLight: POINT,
     SpotLight: SPOT,
     DirectionalLight: DIRECTIONAL,
+    LatLongEnvironment: ENVIRONMENT_MAP,
 }
 
 #: Scene tables of the kernels (float64 unless noted).
@@ -74,7 +76,11 @@ Tables = namedtuple(
         "light_corners",  # (t, 3, 3) their corners
         "light_pdf_area",  # (l,) 1 / area
         "env",  # (3,) constant environment radiance (0: none)
-        "scalars",  # (4,) select_pdf, eps, max_depth, rr_depth
+        "env_image",  # (h, w, 3) environment map radiance ((1, 1, 3) zeros: none)
+        "env_p",  # (h * w,) its texels' probabilities
+        "env_cdf",  # (h * w,) their cdf
+        "scalars",  # (7,) select_pdf, eps, max_depth, rr_depth, the environment's kind,
+        # cos and sin of the map's rotation
     ],
 )
 
@@ -148,6 +154,7 @@ class CompiledTrace:
         light_first = np.zeros(len(lights) + 1, dtype=np.int64)
         faces, cdf, corners, pdf_area = [], [], [], np.zeros(len(lights))
         env = np.zeros(3)
+        env_kind, env_map = 0, None
         for j, light in enumerate(lights):
             kind = light_kind[j]
             if kind == AREA:
@@ -158,6 +165,9 @@ class CompiledTrace:
                 pdf_area[j] = light.pdf_area
             elif kind == ENVIRONMENT:
                 env = np.asarray(light.radiance, dtype=np.float64)
+                env_kind = ENVIRONMENT
+            elif kind == ENVIRONMENT_MAP:
+                env_kind, env_map = ENVIRONMENT_MAP, light
             elif kind == DIRECTIONAL:
                 light_params[j, 3:6] = light.direction
                 light_params[j, 6:9] = light.irradiance
@@ -187,12 +197,18 @@ class CompiledTrace:
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
             pdf_area,
             env,
+            np.zeros((1, 1, 3)) if env_map is None else env_map.image,
+            np.zeros(1) if env_map is None else env_map._p,
+            np.ones(1) if env_map is None else env_map._cdf,
             np.array(
                 [
                     integ.lights.select_pdf,
                     integ.eps,
                     float(integ.max_depth),
                     float(integ.settings.rr_depth),
+                    float(env_kind),
+                    1.0 if env_map is None else np.cos(env_map.rotation),
+                    0.0 if env_map is None else np.sin(env_map.rotation),
                 ]
             ),
         )
@@ -358,6 +374,34 @@ def _frame(nx, ny, nz, tx, ty, tz):
     return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
 
 
+@numba.njit(nogil=True, cache=True)
+def _search_right(cdf, a, b, u):
+    """``a + np.searchsorted(cdf[a:b], u, side="right")``, clipped to ``b - 1``."""
+    lo, hi = a, b
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if cdf[mid] <= u:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(lo, b - 1)
+
+
+@numba.njit(nogil=True, cache=True)
+def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
+    """LatLongEnvironment.pdf and .eval along ``d``: (solid-angle pdf, radiance rgb)."""
+    h, w = image.shape[0], image.shape[1]
+    x = rot_c * dx - rot_s * dz
+    z = rot_s * dx + rot_c * dz
+    u = 0.5 + np.arctan2(x, -z) / (2.0 * np.pi)
+    v = np.arccos(min(max(dy, -1.0), 1.0)) / np.pi
+    i = min(max(int(u * w), 0), w - 1)
+    j = min(max(int(v * h), 0), h - 1)
+    sin_t = np.sin(np.pi * v)
+    pdf = p[j * w + i] * h * w / (2.0 * np.pi * np.pi * sin_t) if sin_t > 1e-12 else 0.0
+    return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
+
+
 @numba.njit(nogil=True, cache=True, inline="always")
 def _sample_light(
     light_first,
@@ -371,6 +415,11 @@ def _sample_light(
     emit_light,
     face_normal,
     env,
+    env_image,
+    env_p,
+    env_cdf,
+    rot_c,
+    rot_s,
     select,
     j,
     px,
@@ -401,6 +450,22 @@ def _sample_light(
             0.25 / np.pi * select,
             False,
         )
+    if kind == ENVIRONMENT_MAP:  # LatLongEnvironment.sample_li: a texel by its cdf
+        h, w = env_image.shape[0], env_image.shape[1]
+        k = _search_right(env_cdf, 0, len(env_cdf), u1)
+        lo = env_cdf[k - 1] if k > 0 else 0.0
+        pk = env_p[k]
+        du = min(max((u1 - lo) / pk if pk > 0 else 0.5, 0.0), 1.0)
+        row, col = k // w, k % w
+        phi = ((col + du) / w - 0.5) * 2.0 * np.pi
+        theta = (row + u2) / h * np.pi
+        st = np.sin(theta)
+        x, z = st * np.sin(phi), -st * np.cos(phi)
+        wx, wy, wz = rot_c * x + rot_s * z, np.cos(theta), -rot_s * x + rot_c * z
+        pdf, e0, e1, e2 = _environment_map(env_image, env_p, rot_c, rot_s, wx, wy, wz)
+        if not pdf > 0.0:
+            e0 = e1 = e2 = 0.0
+        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False
     lp = light_params
     if kind == DIRECTIONAL:
         return (
@@ -442,15 +507,7 @@ def _sample_light(
             True,
         )
     a, b = light_first[j], light_first[j + 1]
-    # np.searchsorted(cdf, u1, side="right") over this light's triangles, clipped
-    lo_i, hi_i = a, b
-    while lo_i < hi_i:
-        mid = (lo_i + hi_i) // 2
-        if light_cdf[mid] <= u1:
-            lo_i = mid + 1
-        else:
-            hi_i = mid
-    t = min(lo_i, b - 1)
+    t = _search_right(light_cdf, a, b, u1)
     lo = light_cdf[t - 1] if t > a else 0.0
     width = light_cdf[t] - lo
     u0 = min(max((u1 - lo) / width if width > 0 else 0.5, 0.0), 1.0)
@@ -524,6 +581,9 @@ def _bounce(
         light_corners,
         light_pdf_area,
         env,
+        env_image,
+        env_p,
+        env_cdf,
         scalars,
     ) = tb
     m = len(face)
@@ -547,14 +607,23 @@ def _bounce(
     ns = 0
     nn = 0
     r = -1  # rank of the lane among the surface hits (its random numbers)
+    env_kind, rot_c, rot_s = scalars[4], scalars[5], scalars[6]
     env_pdf = 0.25 / np.pi * select
     for i in range(m):
         lane = ids[i]
         if face[i] < 0:
-            if env[0] > 0.0 or env[1] > 0.0 or env[2] > 0.0:
+            if env_kind == ENVIRONMENT:
                 w = 1.0 if prev_delta[i] else _power(prev_pdf[i], env_pdf)
                 for c in range(3):
                     L[lane, c] += beta[i, c] * env[c] * w
+            elif env_kind == ENVIRONMENT_MAP:
+                pe, e0, e1, e2 = _environment_map(
+                    env_image, env_p, rot_c, rot_s, d[i, 0], d[i, 1], d[i, 2]
+                )
+                w = 1.0 if prev_delta[i] else _power(prev_pdf[i], pe * select)
+                L[lane, 0] += beta[i, 0] * e0 * w
+                L[lane, 1] += beta[i, 1] * e1 * w
+                L[lane, 2] += beta[i, 2] * e2 * w
             continue
         r += 1
         f = face[i]
@@ -616,6 +685,11 @@ def _bounce(
             emit_light,
             face_normal,
             env,
+            env_image,
+            env_p,
+            env_cdf,
+            rot_c,
+            rot_s,
             select,
             j,
             px,

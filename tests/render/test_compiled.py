@@ -19,6 +19,7 @@ from render.lights import (
     SpotLight,
 )
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
+from render.sky import SunAndSky
 
 D = M.df
 
@@ -117,6 +118,31 @@ def test_same_image_with_delta_lights(light):
     assert compiled.rgb().max() > 0.0
 
 
+def sky_image(h=16, w=32):
+    """A latitude-longitude map: a bright warm spot above a dim blue gradient, one black
+    texel row at the bottom (zero-probability texels)."""
+    v = (np.arange(h)[:, None] + 0.5) / h
+    u = (np.arange(w)[None, :] + 0.5) / w
+    img = np.stack([0.2 + 0 * u + 0.1 * v, 0.3 + 0.1 * v + 0 * u, 0.6 - 0.3 * v + 0 * u], -1)
+    img[2:4, 5:8] = (40.0, 30.0, 20.0)
+    img[-1] = 0.0
+    return img
+
+
+@pytest.mark.parametrize("rotation", [0.0, 117.0])
+def test_same_image_with_an_environment_map(rotation):
+    # importance-sampled texels, MIS on escaped rays, a rotated map
+    scene = stage(D.simple_glossy_bsdf(roughness_u=0.2, tint=(0.8, 0.6, 0.3)), env=0.0)
+    scene.lights.append(LatLongEnvironment(sky_image(), scale=1.5, rotation=rotation))
+    assert_same_image(*both(scene))
+    alone = stage(D.diffuse_reflection_bsdf(tint=0.7), env=0.0, lights=())
+    alone.lights.append(LatLongEnvironment(sky_image(), rotation=rotation))
+    general, compiled = both(alone)
+    assert_same_image(general, compiled)
+    sky = compiled.rgb()[compiled.alpha() == 0]  # the map itself, behind the stage
+    assert len(sky) > 0 and sky.min() > 0.0
+
+
 @pytest.mark.parametrize(
     "kw",
     [
@@ -194,10 +220,10 @@ def test_same_image_with_arguments_that_vary_over_the_surface(material):
 def test_auto_takes_the_compiled_path_only_where_it_can():
     scene = stage(D.diffuse_reflection_bsdf(tint=0.5), size=(16, 12), spp=1)
     assert render(scene, progress=False).stats["path"] == "compiled"
-    scene.lights[0] = LatLongEnvironment(np.ones((4, 8, 3)))
+    scene.lights[0] = SunAndSky((0.3, 0.8, 0.2))
     film = render(scene, progress=False)
     assert film.stats["path"] == "general"
-    assert "LatLongEnvironment" in film.stats["general_reason"]
+    assert "SunAndSky" in film.stats["general_reason"]
 
 
 @pytest.mark.parametrize("bsdf", [CASES["glossy-anisotropic"], CASES["oren-nayar+multiscatter"]],
@@ -224,17 +250,17 @@ def test_same_aovs_as_the_general_path(bsdf):
         (dict(bsdf=D.weighted_layer(weight=0.5, layer=D.specular_bsdf(),
                                     base=D.diffuse_reflection_bsdf())), "elemental"),
         (dict(geometry=M.material_geometry(cutout_opacity=0.5)), "cutout"),
-        (dict(envmap=True), "LatLongEnvironment"),
+        (dict(sky=True), "SunAndSky"),
     ],
-    ids=["transmit-mode", "layer", "cutout", "environment-map"],
+    ids=["transmit-mode", "layer", "cutout", "sky"],
 )
 def test_the_general_path_keeps_what_the_kernels_do_not_model(change, reason):
     bsdf = change.get("bsdf", D.diffuse_reflection_bsdf())
     mat = surface(bsdf, **({"geometry": change["geometry"]} if "geometry" in change else {}))
     scene = stage(bsdf, size=(8, 6), spp=1)
     scene.objects[1] = SceneObject(UVSphere(0.5), mat, name="sphere", resolution=(16, 8))
-    if change.get("envmap"):
-        scene.lights[0] = LatLongEnvironment(np.ones((4, 8, 3)))
+    if change.get("sky"):
+        scene.lights[0] = SunAndSky((0.3, 0.8, 0.2))
     why = compiled_reason(Integrator(scene, scene.build()))
     assert why is not None and reason.lower() in why.lower(), why
     with pytest.raises(ValueError, match="compiled"):
