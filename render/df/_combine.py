@@ -14,16 +14,30 @@ contributes, even where the estimate is poor (a custom curve that is 0 at normal
 incidence but not at the tilted half vectors of a rough layer), which libbsdf's
 ``P = weight * curve(n.k1)`` does not (it never samples such a layer).  Children that
 cannot contribute on a lane (no df, zero weight) get probability exactly 0.
+
+Sampling a nest of combiners in two passes.  A combiner's sample is the mixture pdf
+and ``eval / pdf`` of the **whole node** at the drawn direction, so the chosen child's
+own pdf and weight are discarded (only its validity, and its weight for delta
+events, are kept).  Had every level evaluated its subtree at the drawn direction, a
+nest of depth ``d`` would cost ``O(d^2)`` subtree evaluations.  Instead a combiner's
+``_draw`` only descends (choices, rescaled ``u1``, the leaf's direction) and returns a
+:class:`Draw`; its ``_settle`` then evaluates its subtree once at that direction,
+settling the children's draws on the way (each child's validity, pdf and weight come
+out of the same evaluation its parent sums), so :func:`sample_by_draw` costs one
+evaluation of the tree.  The numbers are the ones each level's own evaluation would
+give, because every level sees the same direction (frames that are not the identity
+excepted: see :meth:`render.df._layer.LayerBsdf._draw`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from render._typing import Arr, ArrayLike, Rgb, Vec3
-from render.bsdf import Bsdf, lane_vector
+from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
+from render.bsdf import Bsdf, BsdfSample, check_dirs, check_samples, lane_vector
 from render.frame import Frame
 from render.numerics import ONE_MINUS_EPS, TOL, luminance, unitize
 
@@ -45,6 +59,11 @@ __all__ = [
     "lum",
     "child_eval_pdf",
     "child_sample",
+    "Draw",
+    "child_draw",
+    "child_settle",
+    "drawn",
+    "sample_by_draw",
 ]
 
 #: share of the selection probability spread uniformly over the children that can
@@ -378,9 +397,70 @@ def child_eval_pdf(child, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
 
 def child_sample(child, wo: Vec3, u1: Arr, u2: np.ndarray):
     """``child.sample`` or a failed sample for None."""
-    from render.bsdf import BsdfSample
-
     if child is None:
         return BsdfSample.failed(len(wo))
     return child.sample(wo, u1, u2)
+
+
+# --- sampling nests of combiners: one descent, one evaluation (module docstring) ------
+
+
+@dataclass(frozen=True, slots=True)
+class Draw:
+    """A combiner's sample before the evaluation that settles it (``_draw``'s result).
+
+    Parameters
+    ----------
+    wi : (n, 3) float64
+        The drawn direction in the combiner's frame; zero rows where nothing was drawn.
+    drawn : (n,) bool
+        Lanes where the descent reached a direction (the chosen leaf's sample
+        succeeded).  Not yet the sample's validity: that needs the evaluation at ``wi``.
+    state : tuple
+        What the combiner's ``_settle`` needs: its choices and its children's draws
+        (a :class:`Draw`, a leaf's :class:`~render.bsdf.BsdfSample`, or None).
+    """
+
+    wi: Vec3
+    drawn: np.ndarray
+    state: tuple
+
+
+def drawn(d) -> np.ndarray:
+    """(n,) bool: lanes where ``d`` (a :class:`Draw` or a BsdfSample) has a direction."""
+    return d.drawn if isinstance(d, Draw) else d.valid
+
+
+def child_draw(child, wo: Vec3, u1: Arr, u2: Arr2):
+    """Descend into ``child``: a combiner's :class:`Draw` (its evaluation deferred), a
+    leaf's BsdfSample (leaves evaluate nothing below them), a failed sample for None."""
+    if child is None:
+        return BsdfSample.failed(len(wo))
+    draw = getattr(child, "_draw", None)
+    return draw(wo, u1, u2) if draw is not None else child.sample(wo, u1, u2)
+
+
+def child_settle(child, wo: Vec3, wi: Vec3, d) -> tuple[Rgb, Arr, BsdfSample | None]:
+    """``child.eval_pdf(wo, wi)`` and the child's sample ``d`` settled at ``wi``.
+
+    A :class:`Draw` is settled by the same evaluation (``child._settle``); a BsdfSample
+    (or None: the child was not sampled) is already final and returned as it is.
+    """
+    if isinstance(d, Draw):
+        return child._settle(wo, wi, d)
+    e, p = child_eval_pdf(child, wo, wi)
+    return e, p, d
+
+
+def sample_by_draw(node, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
+    """``node.sample``: descend once (``node._draw``), then evaluate once (``node._settle``).
+
+    Where nothing was drawn the evaluation runs at ``+z`` (a valid direction: the
+    lanes fail anyway).
+    """
+    (wo,) = check_dirs(wo, names=("wo",))
+    u1, u2 = check_samples(len(wo), u1, u2)
+    d = node._draw(wo, u1, u2)
+    wi = np.where(d.drawn[:, None], d.wi, np.array([0.0, 0.0, 1.0]))
+    return node._settle(wo, wi, d)[2]
 

@@ -77,7 +77,9 @@ returns the mixture density ``P pdf_L + (1 - P) pdf_B`` (the ``pdf`` of Mitsuba'
 alone (delta events: the chosen child's weight times its factor over its probability).
 A child's term in the pdf counts only where its
 contribution to ``eval`` is positive, so ``pdf > 0`` exactly where ``eval > 0`` and
-samples of a child whose factor vanishes at the drawn direction fail.
+samples of a child whose factor vanishes at the drawn direction fail.  Nested nodes
+sample in one descent and one evaluation of the whole tree (``_draw`` and ``_settle``,
+:mod:`render.df._combine`).
 
 The layer's own normal (libbsdf, §0 and §1.4): the layer child sees the directions
 rotated into the frame of ``normal``; a lane whose ``wo`` or ``wi`` lies on different
@@ -95,18 +97,22 @@ from functools import lru_cache
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
-from render.bsdf import Bsdf, BsdfSample, check_dirs, check_samples, lane_color, lanes
+from render.bsdf import Bsdf, BsdfSample, check_dirs, lane_color, lanes
 from render.df._combine import (
+    Draw,
     LayerFrame,
     Memo,
     albedo_correction,
     any_positive,
     cheap_albedo,
     check_child,
-    child_eval_pdf,
+    child_draw,
     child_sample,
+    child_settle,
+    drawn,
     is_mirror,
     lum,
+    sample_by_draw,
     selection,
     union_lobes,
 )
@@ -260,14 +266,18 @@ class LayerBsdf(Bsdf):
         e = np.stack([lum(est_l * a_l), lum(est_b * a_b)], axis=1)
         return selection(e, np.stack([pos_l, pos_b], axis=1))[:, 0]
 
-    def _parts(self, wo: Vec3, wi: Vec3, P: Arr | None = None):
-        """Everything eval, pdf and sample need at ``(wo, wi)`` (``P``: the selection)."""
+    def _parts(self, wo: Vec3, wi: Vec3, P: Arr | None = None, draws=(None, None)):
+        """Everything eval, pdf and sample need at ``(wo, wi)`` (``P``: the selection).
+
+        ``draws``: the children's draws to settle at ``wi`` (:meth:`_settle`); their
+        settled samples are returned last (None for a child not drawn).
+        """
         lf = self.layer_frame
         wo_l, wi_l = lf.to_layer(wo), lf.to_layer(wi)
         agree_o = lf.agree(wo, wo_l)
         ok_l = agree_o & lf.agree(wi, wi_l)
-        e_l, p_l = child_eval_pdf(self.layer, wo_l, wi_l)
-        e_b, p_b = child_eval_pdf(self.base, wo, wi)
+        e_l, p_l, s_l = child_settle(self.layer, wo_l, wi_l, draws[0])
+        e_b, p_b, s_b = child_settle(self.base, wo, wi, draws[1])
         f_l, f_b = self._factors(wo, wi, wo_l, wi_l)
         f_l = np.where(ok_l[:, None], f_l, 0.0)
         c_l = f_l * e_l
@@ -276,7 +286,7 @@ class LayerBsdf(Bsdf):
             P = self._select(wo, wo_l, agree_o)
         pdf = P * p_l * any_positive(c_l) + (1.0 - P) * p_b * any_positive(c_b)
         value = np.where((pdf > 0)[:, None], c_l + c_b, 0.0)
-        return value, pdf, f_l, f_b, any_positive(c_l), any_positive(c_b)
+        return value, pdf, f_l, f_b, any_positive(c_l), any_positive(c_b), s_l, s_b
 
     def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
         wo, wi = check_dirs(wo, wi)
@@ -291,22 +301,32 @@ class LayerBsdf(Bsdf):
         return self.eval_pdf(wo, wi)[1]
 
     def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        u1, u2 = check_samples(n, u1, u2)
+        return sample_by_draw(self, wo, u1, u2)
+
+    def _draw(self, wo: Vec3, u1: Arr, u2: Arr2) -> Draw:
+        """Pick the layer or the base per lane and descend into it (no evaluation)."""
         lf = self.layer_frame
         wo_l = lf.to_layer(wo)
         P = self._select(wo, wo_l, lf.agree(wo, wo_l))
         take_l = u1 < P
         u_l = np.clip(u1 / np.where(P > 0, P, 1.0), 0.0, ONE_MINUS_EPS)
         u_b = np.clip((u1 - P) / np.where(P < 1, 1.0 - P, 1.0), 0.0, ONE_MINUS_EPS)
-        s_l = child_sample(self.layer, wo_l, np.where(take_l, u_l, 0.0), u2)
-        s_b = child_sample(self.base, wo, np.where(take_l, 0.0, u_b), u2)
-        wi = np.where(take_l[:, None], lf.to_inherited(s_l.wi), s_b.wi)
+        # A tilted frame settles the layer's sample now, at its own direction wi_l: the
+        # evaluation in _settle sees to_layer(to_inherited(wi_l)), which rounding moves
+        # off wi_l, and the layer's validity must be the one its own sample gives.
+        draw_layer = child_draw if lf.identity else child_sample
+        d_l = draw_layer(self.layer, wo_l, np.where(take_l, u_l, 0.0), u2)
+        d_b = child_draw(self.base, wo, np.where(take_l, 0.0, u_b), u2)
+        wi = np.where(take_l[:, None], lf.to_inherited(d_l.wi), d_b.wi)
+        return Draw(wi, np.where(take_l, drawn(d_l), drawn(d_b)), (P, take_l, d_l, d_b))
+
+    def _settle(self, wo: Vec3, wi: Vec3, d: Draw) -> tuple[Rgb, Arr, BsdfSample]:
+        """``eval_pdf(wo, wi)`` and the sample ``d`` settled at ``wi`` (its drawn direction
+        wherever it was drawn), from one evaluation of the subtree."""
+        P, take_l, d_l, d_b = d.state
+        value, pdf, f_l, f_b, on_l, on_b, s_l, s_b = self._parts(wo, wi, P, (d_l, d_b))
         valid = np.where(take_l, s_l.valid, s_b.valid)
         delta = np.where(take_l, s_l.is_delta, s_b.is_delta)
-        wi = np.where(valid[:, None], wi, np.array([0.0, 0.0, 1.0]))
-        value, pdf, f_l, f_b, on_l, on_b = self._parts(wo, wi, P)
         # non-delta: the combined density; the chosen child must contribute at wi
         ok_nd = valid & ~delta & np.where(take_l, on_l, on_b) & (pdf > 0)
         w_nd = value / np.where(ok_nd, pdf, 1.0)[:, None]
@@ -319,12 +339,14 @@ class LayerBsdf(Bsdf):
         ok_d = valid & delta & any_positive(w_d) & (pdf_d > 0)
         ok = ok_nd | ok_d
         lobe = np.where(take_l, s_l.lobe, s_b.lobe)
-        return BsdfSample(
+        s = BsdfSample(
             np.where(ok[:, None], wi, 0.0),
             np.where(ok_nd, pdf, np.where(ok_d, pdf_d, 0.0)),
             np.where(ok_nd[:, None], w_nd, np.where(ok_d[:, None], w_d, 0.0)),
             np.where(ok, lobe, 0).astype(np.int32),
         ).checked()
+        name = type(self).__name__
+        return check_finite(f"{name}.eval", value, True), check_finite(f"{name}.pdf", pdf, True), s
 
     def albedo(self, wo: Vec3) -> Rgb:
         """Directional albedo ``∫ eval dwi`` (plus delta lobes).

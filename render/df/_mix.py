@@ -9,7 +9,9 @@ weights (normalised or clamped)::
 Sampling picks component ``i`` with probability ``p_i`` (a defensive mixture of the
 expected contributions ``w_i albedo_i``, :func:`render.df._combine.selection`; libbsdf
 uses ``w_i / sum(w)``), reuses ``u1`` rescaled, and returns ``weight = eval / pdf``
-(delta events: ``w_i weight_i / p_i``).  ``albedo = sum_i w_i albedo_i`` exactly.
+(delta events: ``w_i weight_i / p_i``); nested combiners sample in one descent and one
+evaluation of the whole tree (``_draw`` and ``_settle``, :mod:`render.df._combine`).
+``albedo = sum_i w_i albedo_i`` exactly.
 
 EDF mixes (``normalized_mix`` over ``edf_component``) weight the emission the same way;
 the component is picked with probability proportional to ``luminance(w_i)`` (every
@@ -35,14 +37,17 @@ from render.bsdf import (
     lanes,
 )
 from render.df._combine import (
+    Draw,
     Memo,
     any_positive,
     cheap_albedo,
     check_child,
-    child_eval_pdf,
-    child_sample,
+    child_draw,
+    child_settle,
+    drawn,
     lum,
     pick,
+    sample_by_draw,
     selection,
     union_lobes,
 )
@@ -214,23 +219,30 @@ class MixBsdf(_Weights, Bsdf):
         ) if self.components else np.zeros((n, 0), dtype=bool)
         return selection(est, possible)
 
-    def _parts(self, wo: Vec3, wi: Vec3):
+    def _parts(self, wo: Vec3, wi: Vec3, draws=None):
+        """Everything eval, pdf and sample need at ``(wo, wi)``.
+
+        ``draws``: the components' draws to settle at ``wi`` (:meth:`_settle`, None for
+        a component not drawn); their settled samples are returned last.
+        """
         n = len(wo)
         w = self.weights(n)
         probs = self._probs(wo, w)
         value = np.zeros((n, 3))
         pdf = np.zeros(n)
         on = np.zeros((n, len(self.components)), dtype=bool)
+        samples = [None] * len(self.components)
         for i, c in enumerate(self.components):
             if c.component is None:
                 continue
-            e, p = child_eval_pdf(c.component, wo, wi)
+            d = draws[i] if draws is not None else None
+            e, p, samples[i] = child_settle(c.component, wo, wi, d)
             contrib = w[:, i] * e
             on[:, i] = any_positive(contrib)
             value += contrib
             pdf += probs[:, i] * p * on[:, i]
         value = np.where((pdf > 0)[:, None], value, 0.0)
-        return value, pdf, w, probs, on
+        return value, pdf, w, probs, on, samples
 
     def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
         wo, wi = check_dirs(wo, wi)
@@ -245,33 +257,50 @@ class MixBsdf(_Weights, Bsdf):
         return self.eval_pdf(wo, wi)[1]
 
     def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
+        return sample_by_draw(self, wo, u1, u2)
+
+    def _draw(self, wo: Vec3, u1: Arr, u2: Arr2) -> Draw:
+        """Pick a component per lane and descend into it (no evaluation)."""
         n = len(wo)
-        u1, u2 = check_samples(n, u1, u2)
+        draws = [None] * len(self.components)
+        wi = np.zeros((n, 3))
+        on = np.zeros(n, dtype=bool)
         if not self.components:
-            return BsdfSample.failed(n)
+            return Draw(wi, on, (None, None, None, draws))
         w = self.weights(n)
         idx, u, p_sel = pick(u1, self._probs(wo, w))
-        wi = np.zeros((n, 3))
+        for i, c in enumerate(self.components):
+            mine = idx == i
+            if c.component is None or not np.any(mine):
+                continue
+            draws[i] = child_draw(c.component, wo, np.where(mine, u, 0.0), u2)
+            take = mine & drawn(draws[i])
+            wi = np.where(take[:, None], draws[i].wi, wi)
+            on |= take
+        return Draw(wi, on, (w, idx, p_sel, draws))
+
+    def _settle(self, wo: Vec3, wi: Vec3, d: Draw) -> tuple[Rgb, Arr, BsdfSample]:
+        """``eval_pdf(wo, wi)`` and the sample ``d`` settled at ``wi`` (its drawn direction
+        wherever it was drawn), from one evaluation of the subtree."""
+        n = len(wo)
+        if not self.components:
+            return np.zeros((n, 3)), np.zeros(n), BsdfSample.failed(n)
+        w, idx, p_sel, draws = d.state
+        value, pdf, _, _, on, samples = self._parts(wo, wi, draws)
         cw = np.zeros((n, 3))  # the chosen component's weight times its mix weight
         cpdf = np.zeros(n)
         valid = np.zeros(n, dtype=bool)
         delta = np.zeros(n, dtype=bool)
         lobe = np.zeros(n, dtype=np.int32)
-        for i, c in enumerate(self.components):
-            mine = idx == i
-            if c.component is None or not np.any(mine):
+        for i, s in enumerate(samples):
+            if s is None:
                 continue
-            s = child_sample(c.component, wo, np.where(mine, u, 0.0), u2)
-            take = mine & s.valid
-            wi = np.where(take[:, None], s.wi, wi)
+            take = (idx == i) & s.valid
             cw = np.where(take[:, None], w[:, i] * s.weight, cw)
             cpdf = np.where(take, s.pdf, cpdf)
             valid |= take
             delta |= take & s.is_delta
             lobe = np.where(take, s.lobe, lobe)
-        wi_eval = np.where(valid[:, None], wi, np.array([0.0, 0.0, 1.0]))
-        value, pdf, _, _, on = self._parts(wo, wi_eval)
         rows = np.arange(n)
         chosen_on = on[rows, np.maximum(idx, 0)] & (idx >= 0)
         ok_nd = valid & ~delta & chosen_on & (pdf > 0)
@@ -280,12 +309,14 @@ class MixBsdf(_Weights, Bsdf):
         pdf_d = p_sel * cpdf
         ok_d = valid & delta & any_positive(w_d) & (pdf_d > 0)
         ok = ok_nd | ok_d
-        return BsdfSample(
+        s = BsdfSample(
             np.where(ok[:, None], wi, 0.0),
             np.where(ok_nd, pdf, np.where(ok_d, pdf_d, 0.0)),
             np.where(ok_nd[:, None], w_nd, np.where(ok_d[:, None], w_d, 0.0)),
             np.where(ok, lobe, 0).astype(np.int32),
         ).checked()
+        return (check_finite(f"{self._mdl_name}.eval", value, True),
+                check_finite(f"{self._mdl_name}.pdf", pdf, True), s)
 
     def albedo(self, wo: Vec3) -> Rgb:
         (wo,) = check_dirs(wo, names=("wo",))

@@ -37,13 +37,17 @@ from render.bsdf import (
     lanes,
 )
 from render.df._combine import (
+    Draw,
     Memo,
     albedo_correction,
     any_positive,
     cheap_albedo,
     check_child,
+    child_draw,
     child_eval_pdf,
     child_sample,
+    child_settle,
+    drawn,
     is_mirror,
 )
 from render.df._layer import f82_curve
@@ -114,7 +118,10 @@ class DirectionalFactor(Bsdf):
 
     def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
         wo, wi = check_dirs(wo, wi)
-        e, p = child_eval_pdf(self.base, wo, wi)
+        return self._factored_eval(wo, wi, *child_eval_pdf(self.base, wo, wi))
+
+    def _factored_eval(self, wo: Vec3, wi: Vec3, e: Rgb, p: Arr) -> tuple[Rgb, Arr]:
+        """``(eval, pdf)`` at ``(wo, wi)`` from the base's ``(e, p)`` there."""
         value = self._factor(wo, wi) * e
         pdf = np.where(any_positive(value), p, 0.0)
         value = np.where((pdf > 0)[:, None], value, 0.0)
@@ -128,9 +135,13 @@ class DirectionalFactor(Bsdf):
         return self.eval_pdf(wo, wi)[1]
 
     def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
+        # the base's own pdf is the node's, and its weight only takes the factor
         (wo,) = check_dirs(wo, names=("wo",))
         u1, u2 = check_samples(len(wo), u1, u2)
-        s = child_sample(self.base, wo, u1, u2)
+        return self._factored_sample(wo, child_sample(self.base, wo, u1, u2))
+
+    def _factored_sample(self, wo: Vec3, s: BsdfSample) -> BsdfSample:
+        """The node's sample from the base's sample ``s``."""
         wi = np.where(s.valid[:, None], s.wi, np.array([0.0, 0.0, 1.0]))
         weight = self._factor(wo, wi) * s.weight
         ok = s.valid & any_positive(weight)
@@ -140,6 +151,17 @@ class DirectionalFactor(Bsdf):
             np.where(ok[:, None], weight, 0.0),
             np.where(ok, s.lobe, 0).astype(np.int32),
         ).checked()
+
+    def _draw(self, wo: Vec3, u1: Arr, u2: Arr2) -> Draw:
+        """Descend into the base (inside a layer or mix: see :mod:`render.df._combine`)."""
+        d = child_draw(self.base, wo, u1, u2)
+        return Draw(d.wi, drawn(d), (d,))
+
+    def _settle(self, wo: Vec3, wi: Vec3, d: Draw) -> tuple[Rgb, Arr, BsdfSample]:
+        """``eval_pdf(wo, wi)`` and the sample ``d`` settled at ``wi`` (its drawn direction
+        wherever it was drawn), from one evaluation of the subtree."""
+        e, p, s = child_settle(self.base, wo, wi, d.state[0])
+        return (*self._factored_eval(wo, wi, e, p), self._factored_sample(wo, s))
 
     def _constant(self, n: int) -> bool:
         r0, r90, f82, p = self._params(n)
