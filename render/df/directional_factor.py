@@ -25,40 +25,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
-from render.bsdf import (
-    Bsdf,
-    BsdfSample,
-    Lobe,
-    check_dirs,
-    check_samples,
-    lane_color,
-    lane_float,
-    lanes,
-)
-from render.df._combine import (
-    Draw,
-    Memo,
-    albedo_correction,
-    any_positive,
-    cheap_albedo,
-    check_child,
-    child_draw,
-    child_eval_pdf,
-    child_sample,
-    child_settle,
-    drawn,
-    is_mirror,
-)
+from render._typing import ArrayLike, Rgb, Vec3
+from render.bsdf import Lobe, check_dirs, lane_color, lane_float, lanes
+from render.df._combine import albedo_correction, cheap_albedo, check_child, is_mirror
 from render.df._layer import f82_curve
+from render.df._scaled import ScaledBsdf
 from render.frame import mirror_z
-from render.numerics import check_finite, saturate, unitize
+from render.numerics import saturate, unitize
 
 __all__ = ["DirectionalFactor", "directional_factor"]
 
 
-class DirectionalFactor(Bsdf):
-    """``df::directional_factor`` over lanes.
+class DirectionalFactor(ScaledBsdf):
+    """``df::directional_factor`` over lanes (eval, pdf and sampling: :class:`ScaledBsdf`).
 
     Parameters
     ----------
@@ -81,15 +60,17 @@ class DirectionalFactor(Bsdf):
     [[0.9, 0.5, 0.1], [0.900032, 0.50016, 0.100288]]
     """
 
+    name = "directional_factor"
+
     def __init__(self, normal_tint: ArrayLike = 1.0, grazing_tint: ArrayLike = 1.0,
                  f82_factor: ArrayLike = 1.0, exponent: ArrayLike = 5.0, base=None):
+        super().__init__()
         self.normal_tint = saturate(lane_color(normal_tint, "normal_tint"))
         self.grazing_tint = saturate(lane_color(grazing_tint, "grazing_tint"))
         self.f82_factor = saturate(lane_color(f82_factor, "f82_factor"))
         self.exponent = np.maximum(lane_float(exponent, "exponent"), 0.0)
         self.base = check_child(base, "base")
         self.lobes = Lobe.NONE if self.base is None else self.base.lobes
-        self._cheap_memo = Memo()
 
     def __repr__(self) -> str:
         return (f"directional_factor(normal_tint={self.normal_tint.tolist()}, "
@@ -104,7 +85,7 @@ class DirectionalFactor(Bsdf):
             np.broadcast_to(lanes(self.exponent, n, "exponent"), (n,)),
         )
 
-    def _factor(self, wo: Vec3, wi: Vec3) -> Rgb:
+    def _scale(self, wo: Vec3, wi: Vec3) -> Rgb:
         """``C(wo.h)`` with the reflection half vector (transmitted ``wi`` mirrored)."""
         n = len(wo)
         s = np.where(wo[:, 2] < 0.0, -1.0, 1.0)[:, None]
@@ -115,53 +96,6 @@ class DirectionalFactor(Bsdf):
         kh = np.einsum("ij,ij->i", o, h)
         r0, r90, f82, p = self._params(n)
         return np.where((kh >= 0.0)[:, None], f82_curve(kh, r0, r90, f82, p), 0.0)
-
-    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
-        wo, wi = check_dirs(wo, wi)
-        return self._factored_eval(wo, wi, *child_eval_pdf(self.base, wo, wi))
-
-    def _factored_eval(self, wo: Vec3, wi: Vec3, e: Rgb, p: Arr) -> tuple[Rgb, Arr]:
-        """``(eval, pdf)`` at ``(wo, wi)`` from the base's ``(e, p)`` there."""
-        value = self._factor(wo, wi) * e
-        pdf = np.where(any_positive(value), p, 0.0)
-        value = np.where((pdf > 0)[:, None], value, 0.0)
-        return (check_finite("directional_factor.eval", value, True),
-                check_finite("directional_factor.pdf", pdf, True))
-
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
-        return self.eval_pdf(wo, wi)[0]
-
-    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        return self.eval_pdf(wo, wi)[1]
-
-    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        # the base's own pdf is the node's, and its weight only takes the factor
-        (wo,) = check_dirs(wo, names=("wo",))
-        u1, u2 = check_samples(len(wo), u1, u2)
-        return self._factored_sample(wo, child_sample(self.base, wo, u1, u2))
-
-    def _factored_sample(self, wo: Vec3, s: BsdfSample) -> BsdfSample:
-        """The node's sample from the base's sample ``s``."""
-        wi = np.where(s.valid[:, None], s.wi, np.array([0.0, 0.0, 1.0]))
-        weight = self._factor(wo, wi) * s.weight
-        ok = s.valid & any_positive(weight)
-        return BsdfSample(
-            np.where(ok[:, None], s.wi, 0.0),
-            np.where(ok, s.pdf, 0.0),
-            np.where(ok[:, None], weight, 0.0),
-            np.where(ok, s.lobe, 0).astype(np.int32),
-        ).checked()
-
-    def _draw(self, wo: Vec3, u1: Arr, u2: Arr2) -> Draw:
-        """Descend into the base (inside a layer or mix: see :mod:`render.df._combine`)."""
-        d = child_draw(self.base, wo, u1, u2)
-        return Draw(d.wi, drawn(d), (d,))
-
-    def _settle(self, wo: Vec3, wi: Vec3, d: Draw) -> tuple[Rgb, Arr, BsdfSample]:
-        """``eval_pdf(wo, wi)`` and the sample ``d`` settled at ``wi`` (its drawn direction
-        wherever it was drawn), from one evaluation of the subtree."""
-        e, p, s = child_settle(self.base, wo, wi, d.state[0])
-        return (*self._factored_eval(wo, wi, e, p), self._factored_sample(wo, s))
 
     def _constant(self, n: int) -> bool:
         r0, r90, f82, p = self._params(n)
@@ -179,11 +113,8 @@ class DirectionalFactor(Bsdf):
         est = f82_curve(np.abs(wo[:, 2]), r0, r90, f82, p)
         out = est * self.base.albedo(wo)
         if not (self._constant(n) or is_mirror(self.base)):
-            out += albedo_correction(self.base, wo, lambda wi: self._factor(wo, wi), est)
+            out += albedo_correction(self.base, wo, lambda wi: self._scale(wo, wi), est)
         return np.clip(out, 0.0, None)
-
-    def _cheap_albedo(self, wo: Vec3) -> Rgb:
-        return self._cheap_memo.get(wo, lambda: self._cheap_albedo_now(wo))
 
     def _cheap_albedo_now(self, wo: Vec3) -> Rgb:
         n = len(wo)
