@@ -95,9 +95,7 @@ def compiled_reason(integ) -> str | None:
             return f"{obj.name}: its bsdf is not one elemental bsdf the kernels model"
     for light in integ.lights.lights:
         if isinstance(light, AreaLight):
-            if integ.lights.area_by_object[light.object_id] is not light or (
-                _constant_emission(integ, light.object_id) is None
-            ):
+            if _constant_emission(integ, light.object_id) is None:
                 return "emission that is not a constant diffuse_edf needs the general path"
         elif type(light) not in _KINDS:
             return f"{type(light).__name__} needs the general path"
@@ -121,8 +119,7 @@ class CompiledTrace:
     def __init__(self, integ):
         geo = integ.geo
         n_obj = len(integ.objects)
-        params = np.zeros((n_obj, PARAM_WIDTH))
-        params[:, 0] = BLACK
+        params = np.zeros((n_obj, PARAM_WIDTH))  # BLACK rows unless set below
         emit_hit = np.zeros((n_obj, 3))
         emit_light = np.zeros((n_obj, 3))
         #: objects shaded per lane by numpy first (arguments that vary over the surface,
