@@ -231,11 +231,11 @@ class CompiledTrace:
             hit = integ._intersect(o, d)
             prim = hit["primID"]
             face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
-            if aov is not None and camera_rays:
-                self._first_hit_aovs(aov, face, hit, d)
-            camera_rays = False
             m = int(np.count_nonzero(prim >= 0))
-            lane_row, params, lane_normal = self._varying_rows(face, hit, d)
+            lane_row, params, lane_normal = self._numpy_shading(
+                face, hit, d, aov if camera_rays else None
+            )
+            camera_rays = False
             # the general path's draws, in its order, for the lanes that hit a surface
             rng.random(m)  # cutout decisions (no cutouts here)
             u_light = rng.random((m, 3))
@@ -272,51 +272,42 @@ class CompiledTrace:
             o, d, ids, beta, depth, prev_pdf, prev_delta = (a[:n_next] for a in nxt)
         return L, alpha, {} if aov is None else {a: aov[a] for a in integ.aovs}
 
-    def _shade(self, k: int, lanes, face, hit, d):
-        """``material.shade`` of object ``k`` at the hits of ``lanes``, as the general path
-        shades them: (Shading, world position, interpolated normal and tangent, uv)."""
-        integ = self.integ
-        f = face[lanes]
-        p, ns, tu, tv, uv = integ._attributes(
-            f, hit["u"][lanes].astype(np.float64), hit["v"][lanes].astype(np.float64)
-        )
-        front = dot(-d[lanes], integ.geo.face_normal[f]) > 0
-        sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
-        return sh, p, ns, tu, uv
-
-    def _first_hit_aovs(self, aov: dict, face, hit, d) -> None:
-        """AOVs of the camera rays' hits, from the general path's shading (numpy; only
-        when AOVs are asked for)."""
-        lanes = np.flatnonzero(face >= 0)
-        objs = self.integ.geo.face_object[face[lanes]]
-        for k in np.unique(objs):
-            sel = lanes[objs == k]
-            sh, p, ns, tu, uv = self._shade(k, sel, face, hit, d)
-            nw = ns if sh.normal_world is None else sh.normal_world
-            wo = self.integ._frame(k, sh, ns, tu).to_local(-d[sel])
-            self.integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
-
-    def _varying_rows(self, face, hit, d):
-        """Parameter rows and shading normals of the lanes that hit varying objects.
+    def _numpy_shading(self, face, hit, d, aov):
+        """The numpy part of a segment: ``material.shade``, as the general path shades
+        them and once per object, of the hits on varying objects (their rows and normals
+        for the kernels) and, given ``aov`` (camera rays, AOVs asked for), of every hit
+        (its AOVs).
 
         Returns ``lane_row`` (m,), ``params`` (k + q, PARAM_WIDTH): the objects' rows, then
         one per varying lane, and ``normals`` (q, 3): lane ``i`` takes row
         ``k + lane_row[i]`` and normal ``lane_row[i]``, or its object's row where
-        ``lane_row[i] = -1``."""
+        ``lane_row[i] = -1``.
+        """
+        integ = self.integ
+        hit_objects = integ.geo.face_object[np.maximum(face, 0)]
+        varying = (face >= 0) & self.varying[hit_objects]
+        q = int(np.count_nonzero(varying))
         lane_row = np.full(len(face), -1, dtype=np.int64)
-        hit_objects = self.integ.geo.face_object[np.maximum(face, 0)]
-        lanes = np.flatnonzero((face >= 0) & self.varying[hit_objects])
-        if len(lanes) == 0:
-            return lane_row, self.tables.params, np.zeros((0, 3))
-        params = np.empty((len(lanes), PARAM_WIDTH))
-        normals = np.empty((len(lanes), 3))
+        lane_row[varying] = np.arange(q)
+        params = np.empty((q, PARAM_WIDTH))
+        normals = np.empty((q, 3))
+        lanes = np.flatnonzero(face >= 0 if aov is not None else varying)
         objs = hit_objects[lanes]
         for k in np.unique(objs):
-            sel = np.flatnonzero(objs == k)
-            sh, _, ns, _, _ = self._shade(k, lanes[sel], face, hit, d)
-            params[sel] = rows_of(sh.bsdf, len(sel))
-            normals[sel] = ns if sh.normal_world is None else sh.normal_world
-        lane_row[lanes] = np.arange(len(lanes))
+            sel = lanes[objs == k]
+            f = face[sel]
+            p, ns, tu, tv, uv = integ._attributes(
+                f, hit["u"][sel].astype(np.float64), hit["v"][sel].astype(np.float64)
+            )
+            front = dot(-d[sel], integ.geo.face_normal[f]) > 0
+            sh = integ._shade(k, integ._object_state(k, p, ns, tu, tv, uv), front)
+            nw = ns if sh.normal_world is None else sh.normal_world
+            if aov is not None:
+                wo = integ._frame(k, sh, ns, tu).to_local(-d[sel])
+                integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
+            if self.varying[k]:
+                params[lane_row[sel]] = rows_of(sh.bsdf, len(sel))
+                normals[lane_row[sel]] = nw
         return lane_row, np.concatenate([self.tables.params, params]), normals
 
 
@@ -558,7 +549,7 @@ def _bounce(
     """One segment of every lane: escapes, emission, NEE (shadow rays returned), the
     sampled continuation and Russian roulette.  Returns the shadow rays and the lanes
     that go on, compacted in order.  Bsdf rows come from ``params``
-    (:meth:`CompiledTrace._varying_rows`); lanes with ``lane_row >= 0`` also take their
+    (:meth:`CompiledTrace._numpy_shading`); lanes with ``lane_row >= 0`` also take their
     shading normal from ``lane_normal``."""
     (
         packed,
