@@ -24,12 +24,12 @@ from __future__ import annotations
 
 from collections import namedtuple
 
-import numba
 import numpy as np
 
 from render.camera import primary_rays
 from render.compiled_df import BLACK, PARAM_WIDTH, covers, eval_pdf, params_of, rows_of, sample
 from render.film import empty_aovs
+from render.jit import njit
 from render.lights import (
     INFINITE_DISTANCE,
     AreaLight,
@@ -312,7 +312,7 @@ class CompiledTrace:
 
 
 # ------------------------------------------------------------------------- kernels
-@numba.njit(nogil=True, cache=True)
+@njit
 def _power(a, b):
     a2 = a * a
     b2 = b * b
@@ -320,13 +320,13 @@ def _power(a, b):
     return a2 / s if s > 0.0 else 0.0
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _dot(ax, ay, az, bx, by, bz):
     # the general path's order: (x + z) + y
     return ax * bx + az * bz + ay * by
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _fast_unit(x, y, z):
     """The integrator's _fast_unit for one vector: (ux, uy, uz, valid); rows too short
     are left as they are."""
@@ -336,7 +336,7 @@ def _fast_unit(x, y, z):
     return x, y, z, False
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _unitize(x, y, z):
     """render.numerics.unitize for one vector: (ux, uy, uz, valid)."""
     scale = max(max(abs(x), abs(y)), abs(z))
@@ -347,7 +347,7 @@ def _unitize(x, y, z):
     return wx / length, wy / length, wz / length, True
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _frame(nx, ny, nz, tx, ty, tz):
     """Frame.from_normal_tangent for one lane: (s, t) as six floats."""
     c = _dot(tx, ty, tz, nx, ny, nz)
@@ -362,7 +362,7 @@ def _frame(nx, ny, nz, tx, ty, tz):
     return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _search_right(cdf, a, b, u):
     """``a + np.searchsorted(cdf[a:b], u, side="right")``, clipped to ``b - 1``."""
     lo, hi = a, b
@@ -375,7 +375,7 @@ def _search_right(cdf, a, b, u):
     return min(lo, b - 1)
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
     """LatLongEnvironment.pdf and .eval along ``d``: (solid-angle pdf, radiance rgb)."""
     h, w = image.shape[0], image.shape[1]
@@ -390,7 +390,7 @@ def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
     return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
 
 
-@numba.njit(nogil=True, cache=True, inline="always")
+@njit(inline="always")
 def _sample_light(
     light_first,
     light_cdf,
@@ -523,7 +523,7 @@ def _sample_light(
     return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _bounce(
     tb,
     face,
@@ -760,7 +760,7 @@ def _bounce(
     )
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _add_unblocked(L, s_id, s_c, blocked):
     for i in range(len(s_id)):
         if not blocked[i]:

@@ -53,9 +53,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from render.jit import njit
 from render.numerics import ONE_MINUS_EPS, TOL
 
 __all__ = [
@@ -105,7 +105,6 @@ _QUARTER_PI = np.pi / 4.0  # render.warp._QUARTER_PI
 _C_A = 0.5 - 2.0 / (3.0 * np.pi)
 _C_AVG = 2.0 / 3.0 - 28.0 / (15.0 * np.pi)
 
-_JIT = {"nogil": True, "cache": True}
 
 
 # --- parameter rows ------------------------------------------------------------------------
@@ -230,7 +229,7 @@ def rows_of(bsdf, n: int) -> np.ndarray:
 # --- scalar helpers (ports of render.numerics / render.warp) ----------------------------------
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _clamp_u(u):
     """``np.clip(u, 0, ONE_MINUS_EPS)`` (``render.bsdf.check_samples``)."""
     if u < 0.0:
@@ -240,13 +239,13 @@ def _clamp_u(u):
     return u
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _dot(ax, ay, az, bx, by, bz):
     """``render.numerics.dot``: summed as ``(x + z) + y``."""
     return ax * bx + az * bz + ay * by
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _unitize(x, y, z):
     """``render.numerics.unitize`` of one vector -> ``(ux, uy, uz, valid)``."""
     scale = max(max(abs(x), abs(y)), abs(z))
@@ -259,7 +258,7 @@ def _unitize(x, y, z):
     return wx / length, wy / length, wz / length, True
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _cosine_hemisphere(u0, u1):
     """``render.warp.square_to_cosine_hemisphere`` (concentric disk, then lift)."""
     a = 2.0 * u0 - 1.0
@@ -278,7 +277,7 @@ def _cosine_hemisphere(u0, u1):
 # --- diffuse_reflection_bsdf --------------------------------------------------------------
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _on_g(mu):
     """``G(theta)`` of the closed-form Oren–Nayar albedo (``diffuse_reflection_bsdf._g``)."""
     if mu < 0.0:
@@ -290,7 +289,7 @@ def _on_g(mu):
     return s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
 
 
-@numba.njit(**_JIT)
+@njit
 def _diffuse_value(P, k, wox, woy, woz, wix, wiy, wiz):
     """``DiffuseReflectionBsdf._value`` for oriented ``wo`` -> ``(v_r, v_g, v_b, valid)``."""
     tr, tg, tb = P[k, 1], P[k, 2], P[k, 3]
@@ -325,7 +324,7 @@ def _diffuse_value(P, k, wox, woy, woz, wix, wiy, wiz):
     return vr, vg, vb, True
 
 
-@numba.njit(**_JIT)
+@njit
 def _diffuse_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     if woz < 0.0:  # orient: mirror both through the tangent plane
         woz = -woz
@@ -337,7 +336,7 @@ def _diffuse_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     return vr * pdf, vg * pdf, vb * pdf, pdf
 
 
-@numba.njit(**_JIT)
+@njit
 def _diffuse_sample(P, k, wox, woy, woz, u2x, u2y):
     flip = woz < 0.0
     if flip:
@@ -356,7 +355,7 @@ def _diffuse_sample(P, k, wox, woy, woz, u2x, u2y):
 # --- simple_glossy_bsdf (scatter_reflect, tangent_u = +x) -------------------------------------
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _as_exponents(P, k):
     """Ashikhmin–Shirley exponents and normalisation (``AshikhminShirley.__init__``)."""
     ru = P[k, 4]
@@ -366,7 +365,7 @@ def _as_exponents(P, k):
     return e_u, e_v, math.sqrt((e_u + 1.0) * (e_v + 1.0)) / (2.0 * _PI)
 
 
-@numba.njit(inline="always", **_JIT)
+@njit(inline="always")
 def _as_d_cos(e_u, e_v, norm, ht, hb, hn):
     """``AshikhminShirley.d_cos``: ``D(h) (n.h)`` in the anisotropy frame."""
     s2 = ht * ht + hb * hb
@@ -378,7 +377,7 @@ def _as_d_cos(e_u, e_v, norm, ht, hb, hn):
     return norm * math.exp(expo)
 
 
-@numba.njit(**_JIT)
+@njit
 def _glossy_kernel(P, k, wox, woy, woz, wix, wiy, wiz):
     """``MicrofacetBsdf._kernel`` in ``scatter_reflect`` mode for oriented ``wo``.
 
@@ -424,7 +423,7 @@ def _glossy_kernel(P, k, wox, woy, woz, wix, wiy, wiz):
     return wr, wg, wb, pdf, True
 
 
-@numba.njit(**_JIT)
+@njit
 def _glossy_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     if woz < 0.0:
         woz = -woz
@@ -435,7 +434,7 @@ def _glossy_eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     return wr * pdf, wg * pdf, wb * pdf, pdf
 
 
-@numba.njit(**_JIT)
+@njit
 def _glossy_sample(P, k, wox, woy, woz, u1, u2x, u2y):
     flip = woz < 0.0
     if flip:
@@ -501,7 +500,7 @@ def _glossy_sample(P, k, wox, woy, woz, u1, u2x, u2y):
 # --- specular_bsdf (scatter_reflect) ----------------------------------------------------------
 
 
-@numba.njit(**_JIT)
+@njit
 def _specular_sample(P, k, wox, woy, woz):
     tr, tg, tb = P[k, 1], P[k, 2], P[k, 3]
     flip = woz < 0.0
@@ -518,7 +517,7 @@ def _specular_sample(P, k, wox, woy, woz):
 # --- the interface ------------------------------------------------------------------------
 
 
-@numba.njit(**_JIT)
+@njit
 def eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     """``Bsdf.eval`` and ``Bsdf.pdf`` of the numpy class, for one lane.
 
@@ -549,7 +548,7 @@ def eval_pdf(P, k, wox, woy, woz, wix, wiy, wiz):
     return 0.0, 0.0, 0.0, 0.0
 
 
-@numba.njit(**_JIT)
+@njit
 def sample(P, k, wox, woy, woz, u1, u2x, u2y):
     """``Bsdf.sample`` of the numpy class with the same random numbers, for one lane.
 
@@ -592,7 +591,7 @@ def sample(P, k, wox, woy, woz, u1, u2x, u2y):
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, False
 
 
-@numba.njit(**_JIT)
+@njit
 def eval_pdf_batch(p, wo, wi):
     """:func:`eval_pdf` over lanes (for tests and small batches).
 
@@ -617,7 +616,7 @@ def eval_pdf_batch(p, wo, wi):
     return f, pdf
 
 
-@numba.njit(**_JIT)
+@njit
 def sample_batch(p, wo, u1, u2):
     """:func:`sample` over lanes (for tests and small batches).
 

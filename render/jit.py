@@ -1,0 +1,114 @@
+"""The render package's numba decorator, and its kernel cache keyed to every source file.
+
+numba's own cache (``cache=True``) is keyed on the file that defines a kernel, so a
+kernel that calls a kernel of another file keeps running the old machine code after
+that other file changes.  Every compiled kernel of :mod:`render` is declared with
+:func:`njit` from this module instead, and is cached in a per-user folder whose name
+is a hash of *all* the package's Python sources: any edit to any of them starts a fresh
+cache (old ones stay until the user deletes them).
+
+The folder is ``$PWC_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pwc-workbench`` (by
+default ``~/.cache/pwc-workbench``), never the source tree, so a non-editable install
+caches too.  Tests point ``PWC_CACHE_DIR`` at a fresh folder to prove they compile.
+
+Examples
+--------
+>>> from render.jit import njit
+>>> @njit
+... def twice(x):
+...     return 2.0 * x
+>>> twice(1.5)
+3.0
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+import numba
+from numba.core.caching import CacheImpl, _CacheLocator
+
+__all__ = ["njit", "cache_dir", "SOURCE_KEY"]
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def _source_key() -> str:
+    """sha256 (16 hex digits) of every ``.py`` file of the package, path and content."""
+    h = hashlib.sha256()
+    for path in sorted(_PACKAGE.rglob("*.py")):
+        h.update(str(path.relative_to(_PACKAGE)).encode())
+        h.update(b"\0")
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+#: the key of this tree's sources (part of the cache folder's name)
+SOURCE_KEY = _source_key()
+
+
+def cache_dir() -> Path:
+    """The folder that holds this tree's compiled kernels."""
+    root = os.environ.get("PWC_CACHE_DIR")
+    if root:
+        base = Path(root)
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME")
+        base = (Path(xdg) if xdg else Path.home() / ".cache") / "pwc-workbench"
+    return base / f"numba-{numba.__version__}-{SOURCE_KEY}"
+
+
+class _RenderCacheLocator(_CacheLocator):
+    """numba cache locator for kernels defined in this package (others: numba's own)."""
+
+    def __init__(self, py_func, py_file):
+        self._lineno = py_func.__code__.co_firstlineno
+        rel = Path(py_file).resolve().relative_to(_PACKAGE)
+        self._cache_path = str(cache_dir() / rel.with_suffix(""))
+
+    def get_cache_path(self):
+        return self._cache_path
+
+    def get_source_stamp(self):
+        return SOURCE_KEY
+
+    def get_disambiguator(self):
+        return str(self._lineno)
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not _in_package(py_func):
+            return None
+        self = cls(py_func, py_file)
+        try:
+            self.ensure_cache_path()
+        except OSError:
+            return None
+        return self
+
+
+if _RenderCacheLocator not in CacheImpl._locator_classes:
+    CacheImpl._locator_classes.insert(0, _RenderCacheLocator)
+
+
+def njit(function=None, **options):
+    """``numba.njit`` with the package's defaults: ``nogil=True`` (both cores shade at
+    once) and ``cache=True`` (in :func:`cache_dir`) for functions defined in the package.  Use bare or with options."""
+    def decorate(f):
+        opts = {"nogil": True, "cache": _in_package(f), **options}
+        return numba.njit(**opts)(f)
+
+    return decorate if function is None else decorate(function)
+
+
+def _in_package(function) -> bool:
+    """Whether ``function`` is defined in a file of this package (doctests and
+    interactive code are compiled, not cached)."""
+    try:
+        Path(function.__code__.co_filename).resolve().relative_to(_PACKAGE)
+    except (ValueError, OSError):
+        return False
+    return True
