@@ -96,7 +96,8 @@ if _RenderCacheLocator not in CacheImpl._locator_classes:
 
 def njit(function=None, **options):
     """``numba.njit`` with the package's defaults: ``nogil=True`` (both cores shade at
-    once) and ``cache=True`` (in :func:`cache_dir`) for functions defined in the package.  Use bare or with options."""
+    once) and ``cache=True`` (in :func:`cache_dir`) for functions defined in the
+    package.  Use bare or with options."""
     def decorate(f):
         opts = {"nogil": True, "cache": _in_package(f), **options}
         return numba.njit(**opts)(f)
