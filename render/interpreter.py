@@ -1,0 +1,1011 @@
+"""The compiled interpreter of df programs (:mod:`render.program`): one lane at a time.
+
+Every entry point takes the program's arrays (``code``, ``kids``, ``frames``, ``P``,
+``tables``), the lane's parameter ``row``, local directions (``+z`` the shading normal)
+and a scratch array ``ws`` of :func:`work_size` floats (allocate it once per thread and
+batch, never per lane).  Nothing here recurses (numba's cache cannot hold recursive
+functions): a program is walked in passes over its postorder nodes.
+
+* :func:`prepare` (at ``wo``): each node's cheap albedo and each combiner's selection
+  probabilities (the defensive mixture of :func:`render.df._combine.selection`);
+* :func:`evaluate` (at ``wi``): every node's value and pdf, bottom-up, as each combiner
+  sums its children (a child's term in the pdf counts only where it contributes);
+* :func:`sample`: prepare, descend from the root to one leaf (choices rescale ``u1``),
+  sample the leaf, evaluate once at the drawn direction, and settle the choices on the
+  path: ``eval / pdf`` of the whole tree, or for a delta leaf the product of the factors
+  over the selection probabilities (:mod:`render.df._combine`).
+
+The leaf dispatch (:func:`leaf_eval_pdf`, ...) is the one place that maps an opcode to
+a df module's kernels.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from render.df.anisotropic_vdf import albedo as _vdf_albedo
+from render.df.anisotropic_vdf import eval_pdf as _vdf_eval_pdf
+from render.df.anisotropic_vdf import sample as _vdf_sample
+from render.df.backscattering_glossy_reflection_bsdf import albedo as _bg_albedo
+from render.df.backscattering_glossy_reflection_bsdf import eval_pdf as _bg_eval_pdf
+from render.df.backscattering_glossy_reflection_bsdf import sample as _bg_sample
+from render.df.clamped_mix import mix_weights as _clamped_weights
+from render.df.custom_curve_layer import curve_constant as _cc_curve_constant
+from render.df.custom_curve_layer import curve_h as _cc_curve_h
+from render.df.custom_curve_layer import curve_nk as _cc_curve_nk
+from render.df.custom_curve_layer import layer_estimates as _cc_estimates
+from render.df.custom_curve_layer import layer_factors as _cc_factors
+from render.df.custom_curve_layer import layer_possible as _cc_possible
+from render.df.diffuse_edf import edf_eval_pdf as _de_eval_pdf
+from render.df.diffuse_edf import edf_sample as _de_sample
+from render.df.diffuse_reflection_bsdf import albedo as _dr_albedo
+from render.df.diffuse_reflection_bsdf import eval_pdf as _dr_eval_pdf
+from render.df.diffuse_reflection_bsdf import sample as _dr_sample
+from render.df.diffuse_transmission_bsdf import albedo as _dt_albedo
+from render.df.diffuse_transmission_bsdf import eval_pdf as _dt_eval_pdf
+from render.df.diffuse_transmission_bsdf import sample as _dt_sample
+from render.df.directional_factor import scale as _df_scale
+from render.df.fresnel_layer import curve_constant as _fr_curve_constant
+from render.df.fresnel_layer import curve_h as _fr_curve_h
+from render.df.fresnel_layer import curve_nk as _fr_curve_nk
+from render.df.fresnel_layer import layer_estimates as _fr_estimates
+from render.df.fresnel_layer import layer_factors as _fr_factors
+from render.df.fresnel_layer import layer_possible as _fr_possible
+from render.df.normalized_mix import mix_weights as _normalized_weights
+from render.df.simple_glossy_bsdf import albedo as _sg_albedo
+from render.df.simple_glossy_bsdf import eval_pdf as _sg_eval_pdf
+from render.df.simple_glossy_bsdf import sample as _sg_sample
+from render.df.specular_bsdf import albedo as _sp_albedo
+from render.df.specular_bsdf import eval_pdf as _sp_eval_pdf
+from render.df.specular_bsdf import sample as _sp_sample
+from render.df.spot_edf import edf_eval_pdf as _se_eval_pdf
+from render.df.spot_edf import edf_sample as _se_sample
+from render.df.tint import scale as _tint_scale
+from render.df.weighted_layer import layer_estimates as _wl_estimates
+from render.df.weighted_layer import layer_factors as _wl_factors
+from render.df.weighted_layer import layer_possible as _wl_possible
+from render.jit import njit
+from render.program import (
+    BASE,
+    CHAT_NONE,
+    CHAT_THETA,
+    COS_ZERO,
+    DEFENSIVE,
+    FLAGS,
+    FRAME,
+    KID0,
+    LFRAME,
+    LUM_B,
+    LUM_G,
+    LUM_R,
+    NKIDS,
+    O_ANISOTROPIC_VDF,
+    O_BACKSCATTERING_GLOSSY,
+    O_CLAMPED_MIX,
+    O_CLAMPED_MIX_EDF,
+    O_CUSTOM_CURVE_LAYER,
+    O_DIFFUSE_EDF,
+    O_DIFFUSE_REFLECTION,
+    O_DIFFUSE_TRANSMISSION,
+    O_FRESNEL_LAYER,
+    O_NORMALIZED_MIX,
+    O_NORMALIZED_MIX_EDF,
+    O_SIMPLE_GLOSSY,
+    O_SPECULAR,
+    O_SPOT_EDF,
+    O_TINT,
+    O_WEIGHTED_LAYER,
+    ONE_MINUS_EPS,
+    OP,
+    SIZE,
+    SPECULAR_LOBES,
+    TABLE,
+)
+
+__all__ = [
+    "work_size",
+    "prepare",
+    "evaluate",
+    "eval_pdf",
+    "sample",
+    "albedo",
+    "cheap_albedo",
+    "edf_eval_pdf",
+    "edf_sample",
+]
+
+# per-node registers (R floats per node): value, pdf, contributes, cheap albedo,
+# selection probability of the layer child, Ĉ(wo), wo agrees with the layer frame,
+# Ĉ(wi), a scratch direction
+_F, _PDF, _ON, _CH, _SEL, _CO, _AGO, _CW, _TMP = 0, 3, 4, 5, 8, 9, 12, 13, 16
+_R = 19
+# per-child registers: factor (3), selection probability, contributes, mix weight (3)
+_KF, _KSEL, _KON, _KW = 0, 3, 4, 5
+_KR = 8
+# per-frame registers: basis s, t, n (9), wo (3), wi (3)
+_FS, _FT, _FN, _FWO, _FWI = 0, 3, 6, 9, 12
+_FR = 15
+#: deepest nesting of combiners a program may have (the descent's path is kept in ws)
+MAX_DEPTH = 64
+_NO_KID = -1
+
+
+@njit
+def work_size(n_nodes, n_kids, n_frames):
+    """Floats of scratch one lane's interpretation needs."""
+    return n_nodes * _R + n_kids * _KR + n_frames * _FR + 2 * MAX_DEPTH
+
+
+# ------------------------------------------------------------------ leaf dispatch
+@njit
+def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz):
+    """``(f0, f1, f2, pdf)`` of the leaf df ``op`` (local frame)."""
+    if op == O_DIFFUSE_REFLECTION:
+        return _dr_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_SIMPLE_GLOSSY:
+        return _sg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_SPECULAR:
+        return _sp_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_DIFFUSE_TRANSMISSION:
+        return _dt_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_BACKSCATTERING_GLOSSY:
+        return _bg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_ANISOTROPIC_VDF:
+        return _vdf_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@njit
+def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y):
+    """``(wi xyz, pdf, weight rgb, lobe)`` of the leaf df ``op`` (lobe 0: failed)."""
+    if op == O_DIFFUSE_REFLECTION:
+        return _dr_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_SIMPLE_GLOSSY:
+        return _sg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_SPECULAR:
+        return _sp_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_DIFFUSE_TRANSMISSION:
+        return _dt_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_BACKSCATTERING_GLOSSY:
+        return _bg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_ANISOTROPIC_VDF:
+        return _vdf_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+
+
+@njit
+def leaf_albedo(op, P, row, b, flags, ox, oy, oz):
+    """Directional albedo ``(a0, a1, a2)`` of the leaf df ``op``."""
+    if op == O_DIFFUSE_REFLECTION:
+        return _dr_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_SIMPLE_GLOSSY:
+        return _sg_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_SPECULAR:
+        return _sp_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_DIFFUSE_TRANSMISSION:
+        return _dt_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_BACKSCATTERING_GLOSSY:
+        return _bg_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_ANISOTROPIC_VDF:
+        return _vdf_albedo(P, row, b, flags, ox, oy, oz)
+    return 0.0, 0.0, 0.0
+
+
+@njit
+def _is_leaf(op):
+    return op <= O_ANISOTROPIC_VDF or op == O_DIFFUSE_EDF or op == O_SPOT_EDF
+
+
+@njit
+def _is_layer(op):
+    return op == O_WEIGHTED_LAYER or op == O_FRESNEL_LAYER or op == O_CUSTOM_CURVE_LAYER
+
+
+@njit
+def _is_mix(op):
+    return (op == O_NORMALIZED_MIX or op == O_CLAMPED_MIX or op == O_NORMALIZED_MIX_EDF
+            or op == O_CLAMPED_MIX_EDF)
+
+
+@njit
+def _layer_factors(op, P, row, b, fl, o, i, ol, il, co, ci):
+    if op == O_FRESNEL_LAYER:
+        return _fr_factors(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], ol[0], ol[1],
+                           ol[2], il[0], il[1], il[2], co[0], co[1], co[2], ci[0], ci[1], ci[2])
+    if op == O_CUSTOM_CURVE_LAYER:
+        return _cc_factors(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], ol[0], ol[1],
+                           ol[2], il[0], il[1], il[2], co[0], co[1], co[2], ci[0], ci[1], ci[2])
+    return _wl_factors(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], ol[0], ol[1],
+                       ol[2], il[0], il[1], il[2], co[0], co[1], co[2], ci[0], ci[1], ci[2])
+
+
+@njit
+def _layer_estimates(op, P, row, b, fl, o, ol, co):
+    if op == O_FRESNEL_LAYER:
+        return _fr_estimates(P, row, b, fl, o[0], o[1], o[2], ol[0], ol[1], ol[2],
+                             co[0], co[1], co[2])
+    if op == O_CUSTOM_CURVE_LAYER:
+        return _cc_estimates(P, row, b, fl, o[0], o[1], o[2], ol[0], ol[1], ol[2],
+                             co[0], co[1], co[2])
+    return _wl_estimates(P, row, b, fl, o[0], o[1], o[2], ol[0], ol[1], ol[2],
+                         co[0], co[1], co[2])
+
+
+@njit
+def _layer_possible(op, P, row, b, fl):
+    if op == O_FRESNEL_LAYER:
+        return _fr_possible(P, row, b, fl)
+    if op == O_CUSTOM_CURVE_LAYER:
+        return _cc_possible(P, row, b, fl)
+    return _wl_possible(P, row, b, fl)
+
+
+@njit
+def curve_h(op, P, row, b, fl, vx, vy, vz, xx, xy, xz):
+    """A curve layer's ``C(|v.h|)`` at layer-frame directions ``v``, ``x``."""
+    if op == O_FRESNEL_LAYER:
+        return _fr_curve_h(P, row, b, fl, vx, vy, vz, xx, xy, xz)
+    return _cc_curve_h(P, row, b, fl, vx, vy, vz, xx, xy, xz)
+
+
+@njit
+def curve_nk(op, P, row, b, fl, vx, vy, vz):
+    """A curve layer's ``C(|v.z|)`` (the control variate's curve)."""
+    if op == O_FRESNEL_LAYER:
+        return _fr_curve_nk(P, row, b, fl, vx, vy, vz)
+    return _cc_curve_nk(P, row, b, fl, vx, vy, vz)
+
+
+@njit
+def curve_constant(op, P, row, b, fl):
+    """Whether a layer's curve takes one value at every cosine (then Ĉ never matters)."""
+    if op == O_FRESNEL_LAYER:
+        return _fr_curve_constant(P, row, b, fl)
+    if op == O_CUSTOM_CURVE_LAYER:
+        return _cc_curve_constant(P, row, b, fl)
+    return True
+
+
+@njit
+def _scale(op, P, row, b, fl, o, i):
+    if op == O_TINT:
+        return _tint_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    return _df_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+
+
+@njit
+def _mix_weight(op, P, row, b, fl, k, i):
+    if op == O_CLAMPED_MIX or op == O_CLAMPED_MIX_EDF:
+        return _clamped_weights(P, row, b, fl, k, i)
+    return _normalized_weights(P, row, b, fl, k, i)
+
+
+# ------------------------------------------------------------------ small helpers
+@njit(inline="always")
+def _any_pos(a, b, c):
+    return a > 0.0 or b > 0.0 or c > 0.0
+
+
+@njit(inline="always")
+def _lum(a, b, c):
+    return LUM_R * a + LUM_G * b + LUM_B * c
+
+
+@njit(inline="always")
+def _clamp_u(u):
+    return min(max(u, 0.0), ONE_MINUS_EPS)
+
+
+@njit
+def _agree(identity, w, wl):
+    """``LayerFrame.agree``: ``w`` strictly on one side of both tangent planes."""
+    if identity:
+        return abs(w[2]) > COS_ZERO
+    return w[2] * wl[2] > 0.0 and abs(wl[2]) > COS_ZERO and abs(w[2]) > COS_ZERO
+
+
+@njit
+def _unit(x, y, z):
+    length = math.sqrt(x * x + y * y + z * z)
+    if not length > 1e-300:
+        return 0.0, 0.0, 0.0, False
+    return x / length, y / length, z / length, True
+
+
+@njit
+def _set_bases(frames, P, row, ws, fo, f0, f1):
+    """The basis of every frame ``f0 .. f1 - 1`` in its parent frame
+    (``Frame.from_normal_tangent`` of the layer's unit normal and ``tangent_u``); frame
+    ``f0``, the program's shading frame, is the identity."""
+    for f in range(f0, f1):
+        o = fo + f * _FR
+        if f == f0:
+            for j in range(9):
+                ws[o + j] = 0.0
+            ws[o + _FS] = 1.0
+            ws[o + _FT + 1] = 1.0
+            ws[o + _FN + 2] = 1.0
+            continue
+        s = frames[f, 1]
+        nx, ny, nz, ok = _unit(P[row, s], P[row, s + 1], P[row, s + 2])
+        if not ok:
+            nx, ny, nz = 0.0, 0.0, 1.0
+        tx, ty, tz = P[row, s + 3], P[row, s + 4], P[row, s + 5]
+        c = tx * nx + ty * ny + tz * nz
+        px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
+        sx, sy, sz, ok = _unit(px, py, pz)
+        ok = ok and math.sqrt(px * px + py * py + pz * pz) > 1e-8 * math.sqrt(
+            tx * tx + ty * ty + tz * tz)
+        if not ok:  # Frame.from_normal (Duff et al.)
+            sign = 1.0 if nz >= 0.0 else -1.0
+            a = -1.0 / (sign + nz)
+            bb = nx * ny * a
+            sx, sy, sz = 1.0 + sign * nx * nx * a, sign * bb, -sign * nx
+        ws[o + _FS], ws[o + _FS + 1], ws[o + _FS + 2] = sx, sy, sz
+        ws[o + _FT], ws[o + _FT + 1], ws[o + _FT + 2] = (ny * sz - nz * sy, nz * sx - nx * sz,
+                                                         nx * sy - ny * sx)
+        ws[o + _FN], ws[o + _FN + 1], ws[o + _FN + 2] = nx, ny, nz
+
+
+@njit
+def _set_dirs(frames, ws, fo, f0, f1, which, x, y, z):
+    """Direction ``(x, y, z)`` of frame ``f0`` expressed in every frame ``f0 .. f1 - 1``
+    (``which``: the wo or wi registers)."""
+    o = fo + f0 * _FR
+    ws[o + which], ws[o + which + 1], ws[o + which + 2] = x, y, z
+    for f in range(f0 + 1, f1):
+        o = fo + f * _FR
+        p = fo + frames[f, 0] * _FR
+        vx, vy, vz = ws[p + which], ws[p + which + 1], ws[p + which + 2]
+        ws[o + which] = vx * ws[o + _FS] + vy * ws[o + _FS + 1] + vz * ws[o + _FS + 2]
+        ws[o + which + 1] = vx * ws[o + _FT] + vy * ws[o + _FT + 1] + vz * ws[o + _FT + 2]
+        ws[o + which + 2] = vx * ws[o + _FN] + vy * ws[o + _FN + 1] + vz * ws[o + _FN + 2]
+
+
+@njit
+def _to_frame0(frames, ws, fo, f, x, y, z):
+    """Direction ``(x, y, z)`` of frame ``f`` in its program's shading frame (the one
+    whose parent is -1): ``to_inherited`` up the chain."""
+    while frames[f, 0] >= 0:
+        o = fo + f * _FR
+        x, y, z = (x * ws[o + _FS] + y * ws[o + _FT] + z * ws[o + _FN],
+                   x * ws[o + _FS + 1] + y * ws[o + _FT + 1] + z * ws[o + _FN + 1],
+                   x * ws[o + _FS + 2] + y * ws[o + _FT + 2] + z * ws[o + _FN + 2])
+        f = frames[f, 0]
+    return x, y, z
+
+
+@njit
+def _selection(ws, ko, first, k):
+    """Defensive-mixture selection over kids ``first .. first + k`` whose estimate is in
+    their KSEL register and whose possibility (1/0) in KON; probabilities replace the
+    estimates."""
+    count = 0
+    total = 0.0
+    for j in range(first, first + k):
+        o = ko + j * _KR
+        if ws[o + _KON] > 0.0:
+            count += 1
+            total += max(ws[o + _KSEL], 0.0)
+    for j in range(first, first + k):
+        o = ko + j * _KR
+        if ws[o + _KON] > 0.0:
+            share = 1.0 / count
+            prop = max(ws[o + _KSEL], 0.0) / total if total > 0.0 else share
+            ws[o + _KSEL] = (1.0 - DEFENSIVE) * prop + DEFENSIVE * share
+        else:
+            ws[o + _KSEL] = 0.0
+
+
+@njit
+def chat_lookup(tables, t, wl0, wl1, wl2):
+    """Ĉ from a table at offset ``t`` (``render.df._layer._Table.lookup``)."""
+    mu = wl2
+    side = 1 if mu < 0.0 else 0
+    theta = CHAT_THETA
+    step = math.acos(1e-3) / (theta - 1)
+    tt = math.acos(min(abs(mu), 1.0)) / step
+    j = min(int(math.floor(tt)), theta - 2)
+    f = min(max(tt - j, 0.0), 1.0)
+    base = t + side * 2 * theta * 3
+    a = base + j * 3
+    pad = base + theta * 3 + j * 3
+    out0 = tables[a] * (1.0 - f) + tables[a + 3] * f + tables[pad] * f * (1.0 - f)
+    out1 = tables[a + 1] * (1.0 - f) + tables[a + 4] * f + tables[pad + 1] * f * (1.0 - f)
+    out2 = tables[a + 2] * (1.0 - f) + tables[a + 5] * f + tables[pad + 2] * f * (1.0 - f)
+    return out0, out1, out2
+
+
+# ------------------------------------------------------------------ passes
+@njit
+def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
+    """Directions at ``wo = (x, y, z)`` (frame ``f0``) in the frames ``f0 .. f1 - 1``,
+    then nodes ``lo..hi``: cheap albedos, layer selection probabilities and Ĉ(wo), mix
+    weights and probabilities."""
+    n = code.shape[0]
+    ko = n * _R
+    fo = ko + kids.shape[0] * _KR
+    _set_bases(frames, P, row, ws, fo, f0, f1)
+    _set_dirs(frames, ws, fo, f0, f1, _FWO, x, y, z)
+    for k in range(lo, hi + 1):
+        op = code[k, OP]
+        b = code[k, BASE]
+        fl = code[k, FLAGS]
+        r = k * _R
+        fr = fo + code[k, FRAME] * _FR
+        wo = ws[fr + _FWO:fr + _FWO + 3]
+        if _is_leaf(op):
+            if op == O_DIFFUSE_EDF or op == O_SPOT_EDF:
+                ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = 1.0, 1.0, 1.0
+            else:
+                a0, a1, a2 = leaf_albedo(op, P, row, b, fl, wo[0], wo[1], wo[2])
+                ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = a0, a1, a2
+            continue
+        k0 = code[k, KID0]
+        nk = code[k, NKIDS]
+        if _is_layer(op):
+            lf = fo + code[k, LFRAME] * _FR
+            wol = ws[lf + _FWO:lf + _FWO + 3]
+            ago = _agree(code[k, LFRAME] == code[k, FRAME], wo, wol)
+            c0 = c1 = c2 = 0.0
+            t = code[k, TABLE]
+            if t != CHAT_NONE and ago:
+                c0, c1, c2 = chat_lookup(tables, t, wol[0], wol[1], wol[2])
+            ws[r + _CO], ws[r + _CO + 1], ws[r + _CO + 2] = c0, c1, c2
+            ws[r + _AGO] = 1.0 if ago else 0.0
+            el0, el1, el2, eb0, eb1, eb2 = _layer_estimates(op, P, row, b, fl, wo, wol,
+                                                            ws[r + _CO:r + _CO + 3])
+            pos_l, pos_b = _layer_possible(op, P, row, b, fl)
+            lay, bas = kids[k0], kids[k0 + 1]
+            al0 = al1 = al2 = ab0 = ab1 = ab2 = 0.0
+            if lay != _NO_KID:
+                q = lay * _R + _CH
+                al0, al1, al2 = ws[q], ws[q + 1], ws[q + 2]
+            else:
+                pos_l = False
+            if bas != _NO_KID:
+                q = bas * _R + _CH
+                ab0, ab1, ab2 = ws[q], ws[q + 1], ws[q + 2]
+            else:
+                pos_b = False
+            pos_l = pos_l and ago
+            ka, kb = ko + k0 * _KR, ko + (k0 + 1) * _KR
+            ws[ka + _KSEL] = _lum(el0 * al0, el1 * al1, el2 * al2)
+            ws[kb + _KSEL] = _lum(eb0 * ab0, eb1 * ab1, eb2 * ab2)
+            ws[ka + _KON] = 1.0 if pos_l else 0.0
+            ws[kb + _KON] = 1.0 if pos_b else 0.0
+            _selection(ws, ko, k0, 2)
+            ws[r + _SEL] = ws[ka + _KSEL]
+            g = 1.0 if ago else 0.0
+            ws[r + _CH] = el0 * al0 * g + eb0 * ab0
+            ws[r + _CH + 1] = el1 * al1 * g + eb1 * ab1
+            ws[r + _CH + 2] = el2 * al2 * g + eb2 * ab2
+        elif _is_mix(op):
+            edf = op == O_NORMALIZED_MIX_EDF or op == O_CLAMPED_MIX_EDF
+            s0 = s1 = s2 = 0.0
+            for j in range(nk):
+                o = ko + (k0 + j) * _KR
+                w0, w1, w2 = _mix_weight(op, P, row, b, fl, nk, j)
+                ws[o + _KW], ws[o + _KW + 1], ws[o + _KW + 2] = w0, w1, w2
+                c = kids[k0 + j]
+                a0 = a1 = a2 = 0.0
+                if c != _NO_KID:
+                    q = c * _R + _CH
+                    a0, a1, a2 = ws[q], ws[q + 1], ws[q + 2]
+                # edf mixes select by the weights' luminance (every edf has unit exitance)
+                ws[o + _KSEL] = _lum(w0, w1, w2) if edf else _lum(w0 * a0, w1 * a1, w2 * a2)
+                ws[o + _KON] = 1.0 if (c != _NO_KID and _any_pos(w0, w1, w2)) else 0.0
+                s0 += w0 * a0
+                s1 += w1 * a1
+                s2 += w2 * a2
+            _selection(ws, ko, k0, nk)
+            ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = s0, s1, s2
+        else:  # tint, directional_factor: the factor at the mirror direction
+            ws[r + _TMP], ws[r + _TMP + 1], ws[r + _TMP + 2] = -wo[0], -wo[1], wo[2]
+            f0, f1, f2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3])
+            c = kids[k0]
+            a0 = a1 = a2 = 0.0
+            if c != _NO_KID:
+                q = c * _R + _CH
+                a0, a1, a2 = ws[q], ws[q + 1], ws[q + 2]
+            ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = f0 * a0, f1 * a1, f2 * a2
+
+
+@njit
+def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
+    """Every node ``lo..hi`` at ``wi = (x, y, z)`` (frame ``f0``), after :func:`prepare`."""
+    n = code.shape[0]
+    ko = n * _R
+    fo = ko + kids.shape[0] * _KR
+    _set_dirs(frames, ws, fo, f0, f1, _FWI, x, y, z)
+    for k in range(lo, hi + 1):
+        op = code[k, OP]
+        b = code[k, BASE]
+        fl = code[k, FLAGS]
+        r = k * _R
+        fr = fo + code[k, FRAME] * _FR
+        wo = ws[fr + _FWO:fr + _FWO + 3]
+        wi = ws[fr + _FWI:fr + _FWI + 3]
+        v0 = v1 = v2 = pdf = 0.0
+        if _is_leaf(op):
+            v0, v1, v2, pdf = leaf_eval_pdf(op, P, row, b, fl, wo[0], wo[1], wo[2],
+                                            wi[0], wi[1], wi[2])
+        else:
+            k0 = code[k, KID0]
+            nk = code[k, NKIDS]
+            if _is_layer(op):
+                lf = fo + code[k, LFRAME] * _FR
+                wol = ws[lf + _FWO:lf + _FWO + 3]
+                wil = ws[lf + _FWI:lf + _FWI + 3]
+                agi = _agree(code[k, LFRAME] == code[k, FRAME], wi, wil)
+                c0 = c1 = c2 = 0.0
+                t = code[k, TABLE]
+                if t != CHAT_NONE and agi:
+                    c0, c1, c2 = chat_lookup(tables, t, wil[0], wil[1], wil[2])
+                ws[r + _CW], ws[r + _CW + 1], ws[r + _CW + 2] = c0, c1, c2
+                fl0, fl1, fl2, fb0, fb1, fb2 = _layer_factors(
+                    op, P, row, b, fl, wo, wi, wol, wil, ws[r + _CO:r + _CO + 3],
+                    ws[r + _CW:r + _CW + 3])
+                if not (ws[r + _AGO] > 0.0 and agi):
+                    fl0 = fl1 = fl2 = 0.0
+                P_l = ws[r + _SEL]
+                ka, kb = ko + k0 * _KR, ko + (k0 + 1) * _KR
+                ws[ka + _KF], ws[ka + _KF + 1], ws[ka + _KF + 2] = fl0, fl1, fl2
+                ws[kb + _KF], ws[kb + _KF + 1], ws[kb + _KF + 2] = fb0, fb1, fb2
+                lay, bas = kids[k0], kids[k0 + 1]
+                cl0 = cl1 = cl2 = cb0 = cb1 = cb2 = pl = pb = 0.0
+                if lay != _NO_KID:
+                    q = lay * _R
+                    cl0, cl1, cl2 = fl0 * ws[q], fl1 * ws[q + 1], fl2 * ws[q + 2]
+                    pl = ws[q + _PDF]
+                if bas != _NO_KID:
+                    q = bas * _R
+                    cb0, cb1, cb2 = fb0 * ws[q], fb1 * ws[q + 1], fb2 * ws[q + 2]
+                    pb = ws[q + _PDF]
+                on_l = _any_pos(cl0, cl1, cl2)
+                on_b = _any_pos(cb0, cb1, cb2)
+                ws[ka + _KON] = 1.0 if on_l else 0.0
+                ws[kb + _KON] = 1.0 if on_b else 0.0
+                pdf = (P_l * pl if on_l else 0.0) + ((1.0 - P_l) * pb if on_b else 0.0)
+                v0, v1, v2 = cl0 + cb0, cl1 + cb1, cl2 + cb2
+            elif _is_mix(op):
+                for j in range(nk):
+                    o = ko + (k0 + j) * _KR
+                    c = kids[k0 + j]
+                    if c == _NO_KID:
+                        ws[o + _KON] = 0.0
+                        continue
+                    q = c * _R
+                    c0 = ws[o + _KW] * ws[q]
+                    c1 = ws[o + _KW + 1] * ws[q + 1]
+                    c2 = ws[o + _KW + 2] * ws[q + 2]
+                    on = _any_pos(c0, c1, c2)
+                    ws[o + _KON] = 1.0 if on else 0.0
+                    v0 += c0
+                    v1 += c1
+                    v2 += c2
+                    if on:
+                        pdf += ws[o + _KSEL] * ws[q + _PDF]
+            else:
+                f0, f1, f2 = _scale(op, P, row, b, fl, wo, wi)
+                o = ko + k0 * _KR
+                ws[o + _KF], ws[o + _KF + 1], ws[o + _KF + 2] = f0, f1, f2
+                c = kids[k0]
+                if c != _NO_KID:
+                    q = c * _R
+                    v0, v1, v2 = f0 * ws[q], f1 * ws[q + 1], f2 * ws[q + 2]
+                    if _any_pos(v0, v1, v2):
+                        pdf = ws[q + _PDF]
+                ws[o + _KON] = 1.0 if pdf > 0.0 else 0.0
+            if not pdf > 0.0:
+                v0 = v1 = v2 = pdf = 0.0
+        ws[r + _F], ws[r + _F + 1], ws[r + _F + 2] = v0, v1, v2
+        ws[r + _PDF] = pdf
+        ws[r + _ON] = 1.0 if _any_pos(v0, v1, v2) else 0.0
+
+
+@njit
+def eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, ix, iy, iz):
+    """``(f0, f1, f2, pdf)`` of the program rooted at node ``root`` (its frames
+    ``f0 .. f1 - 1``) at ``(wo, wi)`` in its shading frame."""
+    lo = root - code[root, SIZE] + 1
+    prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
+    evaluate(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ix, iy, iz)
+    r = root * _R
+    return ws[r + _F], ws[r + _F + 1], ws[r + _F + 2], ws[r + _PDF]
+
+
+@njit
+def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1, u2x, u2y):
+    """``(wi xyz, pdf, weight rgb, lobe)`` of the program rooted at ``root`` (lobe 0:
+    failed); directions in its shading frame."""
+    n = code.shape[0]
+    ko = n * _R
+    fo = ko + kids.shape[0] * _KR
+    lo = root - code[root, SIZE] + 1
+    prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
+    # descend: remember the chosen child (kid slot) and its parent at every combiner
+    po = fo + frames.shape[0] * _FR
+    depth = 0
+    k = root
+    while not _is_leaf(code[k, OP]):
+        op = code[k, OP]
+        k0 = code[k, KID0]
+        nk = code[k, NKIDS]
+        j = -1
+        if _is_layer(op):
+            p = ws[k * _R + _SEL]
+            if u1 < p:
+                j = k0
+                u1 = _clamp_u(u1 / p if p > 0.0 else 0.0)
+            else:
+                j = k0 + 1
+                u1 = _clamp_u((u1 - p) / (1.0 - p) if p < 1.0 else 0.0)
+        elif _is_mix(op):
+            cdf = 0.0
+            last = -1
+            for jj in range(k0, k0 + nk):
+                if ws[ko + jj * _KR + _KSEL] > 0.0:
+                    last = jj
+            if last < 0:
+                return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+            j = last
+            for jj in range(k0, last + 1):
+                p = ws[ko + jj * _KR + _KSEL]
+                if u1 < cdf + p and p > 0.0:
+                    j = jj
+                    break
+                cdf += p
+            p = ws[ko + j * _KR + _KSEL]
+            before = 0.0
+            for jj in range(k0, j):
+                before += ws[ko + jj * _KR + _KSEL]
+            u1 = _clamp_u((u1 - before) / p)
+        else:
+            j = k0
+        if kids[j] == _NO_KID or depth >= MAX_DEPTH:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        ws[po + depth] = j
+        ws[po + MAX_DEPTH + depth] = k
+        depth += 1
+        k = kids[j]
+    f = code[k, FRAME]
+    fr = fo + f * _FR
+    wx, wy, wz, pdf, w0, w1, w2, lobe = leaf_sample(
+        code[k, OP], P, row, code[k, BASE], code[k, FLAGS], ws[fr + _FWO], ws[fr + _FWO + 1],
+        ws[fr + _FWO + 2], u1, u2x, u2y)
+    if lobe == 0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    wx, wy, wz = _to_frame0(frames, ws, fo, f, wx, wy, wz)
+    if depth == 0:
+        return wx, wy, wz, pdf, w0, w1, w2, lobe
+    evaluate(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, wx, wy, wz)
+    delta = (lobe & SPECULAR_LOBES) != 0
+    # settle the choices from the leaf up (render.df._combine: Draw/_settle)
+    for d in range(depth - 1, -1, -1):
+        j = int(ws[po + d])
+        k = int(ws[po + MAX_DEPTH + d])
+        o = ko + j * _KR
+        op = code[k, OP]
+        if delta:
+            if _is_layer(op):
+                p = ws[k * _R + _SEL]
+                psel = p if j == code[k, KID0] else 1.0 - p
+                g0, g1, g2 = ws[o + _KF], ws[o + _KF + 1], ws[o + _KF + 2]
+            elif _is_mix(op):
+                psel = ws[o + _KSEL]
+                g0, g1, g2 = ws[o + _KW], ws[o + _KW + 1], ws[o + _KW + 2]
+            else:
+                psel = 1.0
+                g0, g1, g2 = ws[o + _KF], ws[o + _KF + 1], ws[o + _KF + 2]
+            if not psel > 0.0:
+                return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+            w0, w1, w2 = g0 * w0 / psel, g1 * w1 / psel, g2 * w2 / psel
+            pdf = psel * pdf
+            if not (_any_pos(w0, w1, w2) and pdf > 0.0):
+                return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        elif not (ws[o + _KON] > 0.0 and ws[k * _R + _PDF] > 0.0):
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    if not delta:
+        r = root * _R
+        pdf = ws[r + _PDF]
+        w0, w1, w2 = ws[r + _F] / pdf, ws[r + _F + 1] / pdf, ws[r + _F + 2] / pdf
+    return wx, wy, wz, pdf, w0, w1, w2, lobe
+
+
+@njit
+def cheap_albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz):
+    """The fast albedo estimate (``render.df.albedo_estimate``): exact for elemental
+    dfs, mixes, weighted layers and tint; factors at ``wo`` times the children's
+    estimates for the directional combiners."""
+    lo = root - code[root, SIZE] + 1
+    prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
+    r = root * _R + _CH
+    return max(ws[r], 0.0), max(ws[r + 1], 0.0), max(ws[r + 2], 0.0)
+
+
+@njit
+def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy, oz):
+    """Directional albedo: exact for a leaf, else the mean sample weight over the
+    quadrature ``points`` (m, 3) (``u1, u2x, u2y``), clipped to [0, 1]."""
+    if _is_leaf(code[root, OP]):
+        return leaf_albedo(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
+                           ox, oy, oz)
+    a0 = a1 = a2 = 0.0
+    m = points.shape[0]
+    for i in range(m):
+        s = sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz,
+                   points[i, 0], points[i, 1], points[i, 2])
+        if s[7] != 0:
+            a0 += s[4]
+            a1 += s[5]
+            a2 += s[6]
+    return (min(max(a0 / m, 0.0), 1.0), min(max(a1 / m, 0.0), 1.0),
+            min(max(a2 / m, 0.0), 1.0))
+
+
+# ------------------------------------------------------------------ EDF programs
+@njit
+def _edf_leaf_eval_pdf(op, P, row, b, fl, ox, oy, oz):
+    if op == O_SPOT_EDF:
+        return _se_eval_pdf(P, row, b, fl, ox, oy, oz)
+    return _de_eval_pdf(P, row, b, fl, ox, oy, oz)
+
+
+@njit
+def _edf_leaf_sample(op, P, row, b, fl, u1, u2x, u2y):
+    if op == O_SPOT_EDF:
+        return _se_sample(P, row, b, fl, u1, u2x, u2y)
+    return _de_sample(P, row, b, fl, u1, u2x, u2y)
+
+
+@njit
+def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz):
+    """``(e0, e1, e2, pdf)`` of the edf program rooted at ``root`` toward ``wo``
+    (``Edf.eval``, ``Edf.pdf``)."""
+    n = code.shape[0]
+    ko = n * _R
+    lo = root - code[root, SIZE] + 1
+    prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
+    for k in range(lo, root + 1):
+        op = code[k, OP]
+        r = k * _R
+        v0 = v1 = v2 = pdf = 0.0
+        if _is_leaf(op):
+            v0, v1, v2, pdf = _edf_leaf_eval_pdf(op, P, row, code[k, BASE], code[k, FLAGS],
+                                                 ox, oy, oz)
+        else:
+            k0 = code[k, KID0]
+            for j in range(code[k, NKIDS]):
+                o = ko + (k0 + j) * _KR
+                c = kids[k0 + j]
+                if c == _NO_KID:
+                    continue
+                q = c * _R
+                c0 = ws[o + _KW] * ws[q]
+                c1 = ws[o + _KW + 1] * ws[q + 1]
+                c2 = ws[o + _KW + 2] * ws[q + 2]
+                v0 += c0
+                v1 += c1
+                v2 += c2
+                if _any_pos(c0, c1, c2):
+                    pdf += ws[o + _KSEL] * ws[q + _PDF]
+            if not pdf > 0.0:
+                v0 = v1 = v2 = pdf = 0.0
+        ws[r + _F], ws[r + _F + 1], ws[r + _F + 2] = v0, v1, v2
+        ws[r + _PDF] = pdf
+    r = root * _R
+    return ws[r + _F], ws[r + _F + 1], ws[r + _F + 2], ws[r + _PDF]
+
+
+@njit
+def edf_sample(code, kids, frames, P, tables, row, ws, root, f0, f1, u1, u2x, u2y):
+    """``(wo xyz, pdf, weight rgb)`` of the edf program rooted at ``root`` (``EdfSample``;
+    pdf 0: failed)."""
+    n = code.shape[0]
+    ko = n * _R
+    k = root
+    if not _is_leaf(code[k, OP]):
+        prepare(code, kids, frames, P, tables, row, ws, root - code[root, SIZE] + 1, root,
+                f0, f1, 0.0, 0.0, 1.0)
+    while not _is_leaf(code[k, OP]):
+        k0 = code[k, KID0]
+        nk = code[k, NKIDS]
+        last = -1
+        for jj in range(k0, k0 + nk):
+            if ws[ko + jj * _KR + _KSEL] > 0.0:
+                last = jj
+        if last < 0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        j = last
+        cdf = 0.0
+        for jj in range(k0, last + 1):
+            p = ws[ko + jj * _KR + _KSEL]
+            if u1 < cdf + p and p > 0.0:
+                j = jj
+                break
+            cdf += p
+        p = ws[ko + j * _KR + _KSEL]
+        before = 0.0
+        for jj in range(k0, j):
+            before += ws[ko + jj * _KR + _KSEL]
+        u1 = _clamp_u((u1 - before) / p)
+        k = kids[j]
+        if k == _NO_KID:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    wx, wy, wz, pdf, w0, w1, w2 = _edf_leaf_sample(code[k, OP], P, row, code[k, BASE],
+                                                   code[k, FLAGS], u1, u2x, u2y)
+    if k == root or not pdf > 0.0:
+        return wx, wy, wz, pdf, w0, w1, w2
+    e0, e1, e2, pdf = edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1,
+                                   wx, wy, wz)
+    if not pdf > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    c = wz / pdf
+    return wx, wy, wz, pdf, e0 * c, e1 * c, e2 * c
+
+
+# ------------------------------------------------------------------ batches (lanes)
+@njit
+def _row(P, i):
+    return i if P.shape[0] > 1 else 0
+
+
+@njit
+def _ws(code, kids, frames):
+    return np.empty(work_size(code.shape[0], kids.shape[0], frames.shape[0]))
+
+
+@njit
+def eval_pdf_batch(code, kids, frames, P, tables, wo, wi, f, pdf):
+    """:func:`eval_pdf` of a whole program over lanes (``f`` (n, 3), ``pdf`` (n,) written)."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(wo.shape[0]):
+        a, b, c, p = eval_pdf(code, kids, frames, P, tables, _row(P, i), ws, root, 0, nf,
+                              wo[i, 0], wo[i, 1], wo[i, 2], wi[i, 0], wi[i, 1], wi[i, 2])
+        f[i, 0], f[i, 1], f[i, 2], pdf[i] = a, b, c, p
+
+
+@njit
+def sample_batch(code, kids, frames, P, tables, wo, u1, u2, wi, pdf, weight, lobe):
+    """:func:`sample` of a whole program over lanes (outputs written in place)."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(wo.shape[0]):
+        s = sample(code, kids, frames, P, tables, _row(P, i), ws, root, 0, nf, wo[i, 0],
+                   wo[i, 1], wo[i, 2], u1[i], u2[i, 0], u2[i, 1])
+        wi[i, 0], wi[i, 1], wi[i, 2], pdf[i] = s[0], s[1], s[2], s[3]
+        weight[i, 0], weight[i, 1], weight[i, 2], lobe[i] = s[4], s[5], s[6], s[7]
+
+
+@njit
+def albedo_batch(code, kids, frames, P, tables, wo, points, out):
+    """:func:`albedo` of a whole program over lanes."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(wo.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = albedo(code, kids, frames, P, tables, _row(P, i),
+                                                 ws, root, 0, nf, points, wo[i, 0],
+                                                 wo[i, 1], wo[i, 2])
+
+
+@njit
+def cheap_albedo_batch(code, kids, frames, P, tables, wo, out):
+    """:func:`cheap_albedo` of a whole program over lanes."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(wo.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = cheap_albedo(code, kids, frames, P, tables,
+                                                       _row(P, i), ws, root, 0, nf,
+                                                       wo[i, 0], wo[i, 1], wo[i, 2])
+
+
+@njit
+def edf_eval_pdf_batch(code, kids, frames, P, tables, wo, e, pdf):
+    """:func:`edf_eval_pdf` of a whole program over lanes."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(wo.shape[0]):
+        a, b, c, p = edf_eval_pdf(code, kids, frames, P, tables, _row(P, i), ws, root, 0, nf,
+                                  wo[i, 0], wo[i, 1], wo[i, 2])
+        e[i, 0], e[i, 1], e[i, 2], pdf[i] = a, b, c, p
+
+
+@njit
+def edf_sample_batch(code, kids, frames, P, tables, u1, u2, wo, pdf, weight):
+    """:func:`edf_sample` of a whole program over lanes."""
+    ws = _ws(code, kids, frames)
+    root, nf = code.shape[0] - 1, frames.shape[0]
+    for i in range(u1.shape[0]):
+        s = edf_sample(code, kids, frames, P, tables, _row(P, i), ws, root, 0, nf, u1[i],
+                       u2[i, 0], u2[i, 1])
+        wo[i, 0], wo[i, 1], wo[i, 2], pdf[i] = s[0], s[1], s[2], s[3]
+        weight[i, 0], weight[i, 1], weight[i, 2] = s[4], s[5], s[6]
+
+
+# ------------------------------------------------------------------ Ĉ tables
+@njit
+def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):
+    """The Ĉ table of curve layer ``k`` (``render.df._layer.CurveAlbedo._build_side``,
+    both sides): ``out`` (2, 2, THETA, 3) gets per side the node values (largest over
+    the azimuths of ``dirs``) and the concave pad.
+
+    ``dirs`` (2, THETA * PHI, 3): the layer-frame table directions of each side;
+    ``points`` (m, 3) the Sobol points.  The layer child is sampled in its own frame;
+    with an elemental layer ``C(nk) albedo_L`` is the control variate.
+    """
+    ws = _ws(code, kids, frames)
+    n = code.shape[0]
+    ko = n * _R
+    fo = ko + kids.shape[0] * _KR
+    nf = frames.shape[0]
+    op = code[k, OP]
+    b = code[k, BASE]
+    fl = code[k, FLAGS]
+    lay = kids[code[k, KID0]]
+    lframe = code[k, LFRAME]
+    controlled = _is_leaf(code[lay, OP])
+    theta = CHAT_THETA
+    nd = dirs.shape[1]
+    phi = nd // theta
+    m = points.shape[0]
+    _set_bases(frames, P, row, ws, fo, 0, nf)
+    for side in range(2):
+        for t in range(theta):
+            for c in range(3):
+                out[side, 0, t, c] = 0.0
+        for d in range(nd):
+            vx, vy, vz = dirs[side, d, 0], dirs[side, d, 1], dirs[side, d, 2]
+            # the direction in frame 0, for the subtree's own frames
+            gx, gy, gz = _to_frame0(frames, ws, fo, lframe, vx, vy, vz)
+            n0, n1, n2 = curve_nk(op, P, row, b, fl, vx, vy, vz)
+            s0 = s1 = s2 = 0.0
+            for i in range(m):
+                s = sample(code, kids, frames, P, tables, row, ws, lay, 0, nf, gx, gy, gz,
+                           points[i, 0], points[i, 1], points[i, 2])
+                if s[7] == 0:
+                    continue
+                fx, fy, fz = s[0], s[1], s[2]
+                # back into the layer frame
+                lf = fo + lframe * _FR
+                if lframe > 0:
+                    _set_dirs(frames, ws, fo, 0, nf, _FWI, fx, fy, fz)
+                    fx, fy, fz = ws[lf + _FWI], ws[lf + _FWI + 1], ws[lf + _FWI + 2]
+                h0, h1, h2 = curve_h(op, P, row, b, fl, vx, vy, vz, fx, fy, fz)
+                if controlled:
+                    h0, h1, h2 = h0 - n0, h1 - n1, h2 - n2
+                s0 += h0 * s[4]
+                s1 += h1 * s[5]
+                s2 += h2 * s[6]
+            c0, c1, c2 = s0 / m, s1 / m, s2 / m
+            if controlled:
+                a0, a1, a2 = leaf_albedo(code[lay, OP], P, row, code[lay, BASE],
+                                         code[lay, FLAGS], vx, vy, vz)
+                c0, c1, c2 = c0 + n0 * a0, c1 + n1 * a1, c2 + n2 * a2
+            if not abs(vz) > 0.0:
+                c0 = c1 = c2 = 0.0
+            t = d // phi
+            out[side, 0, t, 0] = max(out[side, 0, t, 0], min(max(c0, 0.0), 1.0))
+            out[side, 0, t, 1] = max(out[side, 0, t, 1], min(max(c1, 0.0), 1.0))
+            out[side, 0, t, 2] = max(out[side, 0, t, 2], min(max(c2, 0.0), 1.0))
+        # the concave correction of each interval (second differences, pole mirrored)
+        for c in range(3):
+            for t in range(theta):
+                out[side, 1, t, c] = 0.0
+            for t in range(theta - 1):
+                d2a = _second_difference(out, side, c, t, theta)
+                d2b = _second_difference(out, side, c, t + 1, theta)
+                out[side, 1, t, c] = 0.5 * max(0.0, -min(d2a, d2b))
+
+
+@njit
+def _second_difference(out, side, c, t, theta):
+    """``v[t-1] - 2 v[t] + v[t+1]`` with the pole mirrored (``v[-1] = v[1]``) and the last
+    node taking its neighbour's value."""
+    if t == theta - 1:
+        t = theta - 2
+    prev = out[side, 0, 1, c] if t == 0 else out[side, 0, t - 1, c]
+    return prev - 2.0 * out[side, 0, t, c] + out[side, 0, t + 1, c]

@@ -1,0 +1,556 @@
+"""Materials as programs: a df tree flattened to nodes that one compiled interpreter runs.
+
+A bound distribution function (one df, or a tree of layers, mixes and modifiers over
+elemental dfs) is a :class:`Program`, as Blender Cycles' shader virtual machine runs a
+node graph compiled to a linear program, and the MDL SDK compiles a material instance
+to target code:
+
+* ``code`` (N, NCOL) int64: the nodes in **postorder** (children before their parent,
+  the root last, every subtree a contiguous range).  Columns: :data:`OP` (the opcode:
+  which df), :data:`BASE` (its first parameter slot), :data:`FRAME` (the frame its
+  directions are expressed in), :data:`NKIDS` and :data:`KID0` (its children, a range
+  of ``kids``; -1 is MDL's black ``bsdf()``), :data:`FLAGS` (uniform enums:
+  :mod:`render.df._signature`), :data:`LFRAME` (a layer's frame for its ``layer``
+  child), :data:`TABLE` (a curve layer's Ĉ table: offset in ``tables``, or
+  :data:`CHAT_NONE`), :data:`SIZE` (nodes in its subtree).
+* ``P`` (rows, S) float64: every node's parameters packed by its df's
+  :class:`~render.df._signature.Signature` (clamped), one row per lane (or one row for
+  all lanes).
+* ``frames`` (F, 2) int64: ``[parent, slot]``: frame 0 is the shading frame (parent
+  -1); a layer with its own ``normal`` has a frame whose normal and ``tangent_u`` (in
+  the parent frame) sit at ``P[row, slot:slot + 6]``.  Frames are listed parents first.
+* ``tables``: the curve layers' curve-weighted albedos Ĉ (:mod:`render.df._layer`),
+  tabulated once per distinct layer by the interpreter itself.
+
+The interpreter (:func:`eval_pdf`, :func:`sample`, :func:`albedo`, :func:`edf_eval_pdf`,
+:func:`edf_sample`) takes one lane (``row``) and local directions and walks the program
+without recursion: a pass over the nodes at ``wo`` (cheap albedos, selection
+probabilities), a descent for sampling, and one pass at ``wi`` that evaluates every node
+once (the numbers each combiner sums).  The semantics are those documented in
+:mod:`render.df._layer`, :mod:`render.df._mix` and :mod:`render.df._scaled`; each df's
+math lives once, in its module's kernels.
+
+:class:`ProgramBsdf` and :class:`ProgramEdf` run programs over lanes for the Python API
+(``bsdf.eval(wo, wi)``, ``bsdf.sample(wo, u1, u2)``, ...): the df checklist of the tests
+runs on the very kernels that render.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe, check_dirs, check_samples
+from render.df._signature import MODE_FLAGS, THIN_WALLED, Signature
+
+__all__ = ["Program", "ProgramBsdf", "ProgramEdf", "ProgramTable", "leaf_program", "combine"]
+
+# ----------------------------------------------------------------------------- layout
+OP, BASE, FRAME, NKIDS, KID0, FLAGS, LFRAME, TABLE, SIZE, WIDTH = range(10)
+NCOL = 10
+#: ``code[k, TABLE]``: no Ĉ (a constant curve, a mirror or missing layer, or per-lane
+#: parameters: libbsdf's base factor alone)
+CHAT_NONE = -2
+#: Ĉ table: nodes over the layer-frame polar angle, azimuths kept (largest), Sobol
+#: points per direction (render.df._layer's CURVE_ALBEDO_* values)
+CHAT_THETA, CHAT_PHI, CHAT_POINTS, CHAT_MU_MIN = 17, 4, 512, 1e-3
+#: quadrature points of a combiner's full albedo (Sobol, through its own sampler)
+ALBEDO_POINTS = 256
+
+# opcodes: one per distribution function (a new df is a new opcode)
+(
+    O_DIFFUSE_REFLECTION,
+    O_DIFFUSE_TRANSMISSION,
+    O_SPECULAR,
+    O_SIMPLE_GLOSSY,
+    O_BACKSCATTERING_GLOSSY,
+    O_ANISOTROPIC_VDF,
+    O_WEIGHTED_LAYER,
+    O_FRESNEL_LAYER,
+    O_CUSTOM_CURVE_LAYER,
+    O_NORMALIZED_MIX,
+    O_CLAMPED_MIX,
+    O_TINT,
+    O_DIRECTIONAL_FACTOR,
+    O_DIFFUSE_EDF,
+    O_SPOT_EDF,
+    O_NORMALIZED_MIX_EDF,
+    O_CLAMPED_MIX_EDF,
+) = range(1, 18)
+
+COS_ZERO = 1e-10  # render.numerics.TOL.cos_zero
+DEFENSIVE = 0.05  # share of a combiner's selection spread evenly (render.df._combine)
+ONE_MINUS_EPS = float(np.nextafter(1.0, 0.0))
+LUM_R, LUM_G, LUM_B = 0.212671, 0.715160, 0.072169  # MDL's math::luminance
+SPECULAR_LOBES = int(Lobe.SPECULAR)
+
+
+@dataclass(frozen=True, eq=False)
+class Program:
+    """A bound df tree (see the module docstring for the arrays).
+
+    Parameters
+    ----------
+    kind : {"bsdf", "edf"}
+    code : (N, NCOL) int64
+    kids : (K,) int64
+    frames : (F, 2) int64
+    P : (rows, S) float64
+    tables : (T,) float64
+    lobes : Lobe
+    """
+
+    kind: str
+    code: np.ndarray
+    kids: np.ndarray
+    frames: np.ndarray
+    P: np.ndarray
+    tables: np.ndarray
+    lobes: Lobe
+
+    @property
+    def rows(self) -> int:
+        """Lanes of parameters (1: the same for every lane)."""
+        return self.P.shape[0]
+
+    @property
+    def root(self) -> int:
+        return self.code.shape[0] - 1
+
+
+def _as_rows(value, width: int, name: str) -> np.ndarray:
+    """An argument as (rows, width) float64: a number, a ``width`` vector, ``(n,)`` per
+    lane (width 1), ``(n, width)`` per lane, or a number per lane broadcast over a colour."""
+    a = np.asarray(value, dtype=np.float64)
+    if a.ndim == 0:
+        a = np.full((1, width), float(a))
+    elif a.ndim == 1:
+        if width == 1:
+            a = a[:, None]
+        elif a.shape[0] == width:
+            a = a[None, :]
+        else:
+            raise ValueError(f"{name} must have {width} components (or one per lane), "
+                             f"got shape {a.shape}")
+    elif a.ndim == 2 and a.shape[1] == 1 and width > 1:
+        a = np.repeat(a, width, axis=1)
+    if a.ndim != 2 or a.shape[1] != width:
+        raise ValueError(f"{name} must be a number, {width} numbers or one row per lane, "
+                         f"got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return a
+
+
+def _rows(arrays: list) -> int:
+    n = max((a.shape[0] for a in arrays), default=1)
+    for a in arrays:
+        if a.shape[0] not in (1, n):
+            raise ValueError(f"arguments have {a.shape[0]} and {n} rows: give one value per "
+                             "lane or one for all lanes")
+    return n
+
+
+def _stack(arrays: list) -> np.ndarray:
+    """Columns side by side, broadcast to a common number of rows."""
+    if not arrays:
+        return np.zeros((1, 0))
+    n = _rows(arrays)
+    return np.concatenate([np.broadcast_to(a, (n, a.shape[1])) for a in arrays], axis=1)
+
+
+def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int]:
+    """The slot columns of one node and its flags, from MDL arguments and context.
+
+    ``values`` maps parameter (and context) names to constants or per-lane arrays;
+    missing parameters take MDL's defaults (a missing required one is an error), missing
+    context values 1 (``ior_*``).  ``mode`` and ``thin_walled`` become flags.
+    """
+    cols, flags = [], 0
+    for p in signature.params:
+        if p.type == "scatter_mode":
+            mode = values.get(p.name, p.default)
+            mode = getattr(mode, "value", mode)
+            key = str(mode).removeprefix("::").removeprefix("df::")
+            if key not in MODE_FLAGS:
+                raise ValueError(f"{name}: mode must be one of {', '.join(MODE_FLAGS)}; "
+                                 f"got {mode!r}")
+            flags |= MODE_FLAGS[key]
+            continue
+        if not p.width:
+            continue
+        value = values.get(p.name, p.default)
+        if isinstance(value, str) or value is None:
+            raise ValueError(f"{name} needs the argument {p.name!r}")
+        a = _as_rows(value, p.width, f"{name}({p.name})")
+        if p.clamp is not None:
+            a = np.clip(a, p.clamp[0], p.clamp[1])
+        cols.append(a)
+    for c in signature.context:
+        a = _as_rows(values.get(c, 1.0), 1, f"{name}({c})")
+        if c.startswith("ior") and np.any(a <= 0.0):
+            raise ValueError(f"{name}: {c} must be > 0 (an index of refraction), got {a.min()}")
+        cols.append(a)
+    if values.get("thin_walled", False):
+        flags |= THIN_WALLED
+    return _stack(cols), flags
+
+
+def leaf_program(kind: str, op: int, signature: Signature, values: dict, lobes: Lobe,
+                 name: str) -> Program:
+    """The program of one elemental df."""
+    P, flags = pack(signature, values, name)
+    code = np.zeros((1, NCOL), dtype=np.int64)
+    code[0, OP], code[0, FLAGS], code[0, SIZE], code[0, WIDTH] = op, flags, 1, P.shape[1]
+    code[0, TABLE] = CHAT_NONE
+    return Program(kind, code, np.zeros(0, dtype=np.int64), np.array([[-1, 0]], dtype=np.int64),
+                   np.ascontiguousarray(P), np.zeros(0), lobes)
+
+
+def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
+            frame: np.ndarray | None = None, curve_columns: np.ndarray | None = None) -> Program:
+    """The program of a combiner over ``children`` (Programs, or None for ``bsdf()``).
+
+    Parameters
+    ----------
+    columns : (rows, w) float64
+        The node's own packed parameters (:func:`pack`, or a mix's weights).
+    frame : (rows, 6) float64, optional
+        A layer's own normal and ``tangent_u`` in the inherited frame (None: the layer
+        child shares the node's frame).  Only for layers; children[0] is the layer.
+    curve_columns : (w,) bool, optional
+        Which of ``columns`` the layer's curve depends on (for its Ĉ table).
+    """
+    codes, kid_lists, frame_rows, Ps, tabs = [], [], [[-1, 0]], [], []
+    roots, lobes = [], Lobe.NONE
+    n_nodes = n_slots = n_tab = 0
+    layer_frame = 0
+    for i, child in enumerate(children):
+        if child is None:
+            roots.append(-1)
+            continue
+        lobes |= child.lobes
+        c = child.code.copy()
+        # the child's frames: its frame 0 is the node's (or the layer frame)
+        fmap = np.zeros(len(child.frames), dtype=np.int64)
+        if i == 0 and frame is not None:
+            layer_frame = len(frame_rows)
+            frame_rows.append([0, -1])  # the layer frame; slot set below
+            fmap[0] = layer_frame
+        for f in range(1, len(child.frames)):
+            fmap[f] = len(frame_rows)
+            parent, slot = child.frames[f]
+            frame_rows.append([fmap[parent] if parent >= 0 else fmap[0], slot + n_slots])
+        c[:, FRAME] = fmap[c[:, FRAME]]
+        c[:, LFRAME] = fmap[c[:, LFRAME]]
+        c[:, BASE] += n_slots
+        c[:, KID0] += len(np.concatenate(kid_lists)) if kid_lists else 0
+        c[:, TABLE] = np.where(c[:, TABLE] >= 0, c[:, TABLE] + n_tab, c[:, TABLE])
+        k = child.kids.copy()
+        kid_lists.append(np.where(k >= 0, k + n_nodes, k))
+        codes.append(c)
+        Ps.append(child.P)
+        tabs.append(child.tables)
+        roots.append(n_nodes + child.root)
+        n_nodes += len(c)
+        n_slots += child.P.shape[1]
+        n_tab += len(child.tables)
+    own = [columns] + ([frame] if frame is not None else [])
+    P = np.ascontiguousarray(_stack(Ps + own))
+    if frame is not None:
+        frame_rows[layer_frame][1] = n_slots + columns.shape[1]
+    kids = np.concatenate(kid_lists + [np.array(roots, dtype=np.int64)]) if kid_lists else \
+        np.array(roots, dtype=np.int64)
+    node = np.zeros((1, NCOL), dtype=np.int64)
+    node[0, OP], node[0, BASE], node[0, FLAGS] = op, n_slots, flags
+    node[0, NKIDS], node[0, KID0] = len(children), len(kids) - len(children)
+    node[0, LFRAME] = layer_frame
+    node[0, TABLE] = CHAT_NONE
+    node[0, SIZE] = n_nodes + 1
+    node[0, WIDTH] = P.shape[1] - n_slots
+    code = np.concatenate(codes + [node]) if codes else node
+    program = Program(kind, np.ascontiguousarray(code), kids,
+                      np.array(frame_rows, dtype=np.int64).reshape(-1, 2), P,
+                      np.concatenate(tabs) if tabs else np.zeros(0), lobes)
+    if curve_columns is not None:
+        program = _with_chat_table(program, curve_columns)
+    return program
+
+
+# ----------------------------------------------------------------------------- Ĉ tables
+_TABLES: OrderedDict = OrderedDict()
+_TABLES_MAX = 256
+_TABLES_LOCK = threading.Lock()
+
+
+def _with_chat_table(program: Program, curve_columns: np.ndarray) -> Program:
+    """``program`` (a curve layer at its root) with its Ĉ table, where one applies.
+
+    Ĉ is tabulated from parameter row 0 when every parameter it depends on (the layer
+    child's subtree, its frames, the curve's own parameters) is the same on every lane;
+    otherwise (textured layers) the layer keeps libbsdf's base factor (``CHAT_NONE``).
+    A table is built once per distinct layer and curve (cached by value).
+    """
+    from render.df._signature import MODE_MASK, REFLECT
+
+    code, root = program.code, program.root
+    lay = program.kids[code[root, KID0]]
+    if lay < 0:
+        return program
+    # a mirror layer (specular_bsdf reflecting) never exceeds libbsdf's factor
+    if code[lay, OP] == O_SPECULAR and (code[lay, FLAGS] & MODE_MASK) == REFLECT:
+        return program
+    lo = lay - code[lay, SIZE] + 1
+    cols = [np.arange(code[k, BASE], code[k, BASE] + code[k, WIDTH]) for k in range(lo, lay + 1)]
+    cols.append(code[root, BASE] + np.flatnonzero(curve_columns))
+    cols = np.concatenate(cols)
+    P = program.P
+    if P.shape[0] > 1 and not np.all(P[:, cols] == P[0, cols]):
+        return program
+    from render import interpreter
+
+    if interpreter.curve_constant(code[root, OP], P, 0, code[root, BASE], code[root, FLAGS]):
+        return program
+    key = (code[lo:].tobytes(), program.kids.tobytes(), program.frames.tobytes(),
+           P[0, cols].tobytes())
+    with _TABLES_LOCK:
+        table = _TABLES.get(key)
+        if table is not None:
+            _TABLES.move_to_end(key)
+    if table is None:
+        out = np.zeros((2, 2, CHAT_THETA, 3))
+        interpreter.build_chat_table(code, program.kids, program.frames, P[:1], program.tables,
+                                     0, root, _chat_directions(), sobol_points(CHAT_POINTS), out)
+        table = out.ravel()
+        table.setflags(write=False)
+        with _TABLES_LOCK:
+            _TABLES[key] = table
+            while len(_TABLES) > _TABLES_MAX:
+                _TABLES.popitem(last=False)
+    code = code.copy()
+    code[root, TABLE] = len(program.tables)
+    return Program(program.kind, code, program.kids, program.frames, P,
+                   np.concatenate([program.tables, table]), program.lobes)
+
+
+@lru_cache(maxsize=1)
+def _chat_directions() -> np.ndarray:
+    """(2, THETA * PHI, 3): the layer-frame directions of each side of a Ĉ table
+    (uniform in the polar angle from the pole to ``acos(CHAT_MU_MIN)``; azimuths 0, 45,
+    90, 135 degrees)."""
+    step = float(np.arccos(CHAT_MU_MIN)) / (CHAT_THETA - 1)
+    theta = np.arange(CHAT_THETA) * step
+    phi = np.arange(CHAT_PHI) * (np.pi / CHAT_PHI)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    out = np.empty((2, CHAT_THETA * CHAT_PHI, 3))
+    for side in (0, 1):
+        z = np.cos(t) * (-1.0 if side else 1.0)
+        out[side] = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), z],
+                             axis=-1).reshape(-1, 3)
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=8)
+def sobol_points(m: int) -> np.ndarray:
+    """The first ``m`` (a power of 2) points of Sobol's sequence in [0, 1)^3, shifted by
+    ``1/(2m)`` (no point on a cell edge); columns ``u1, u2x, u2y``.
+
+    Unscrambled, Gray-code order, Joe and Kuo's direction numbers for dimensions 2
+    and 3.
+
+    Examples
+    --------
+    >>> (sobol_points(4) - 1 / 8).tolist()
+    [[0.0, 0.0, 0.0], [0.5, 0.5, 0.5], [0.75, 0.25, 0.25], [0.25, 0.75, 0.75]]
+    """
+    if m < 1 or m & (m - 1):
+        raise ValueError(f"m must be a power of 2 (the Sobol points form a net), got {m}")
+    bits = 32
+    dims = [[1] * bits, [1], [1, 3]]
+    for d, (s, a) in ((1, (1, ())), (2, (2, (1,)))):
+        mk = dims[d]
+        for k in range(s, bits):
+            new = mk[k - s] ^ (mk[k - s] << s)
+            for j, aj in enumerate(a, start=1):
+                new ^= (mk[k - j] << j) if aj else 0
+            mk.append(new)
+    v = np.array([[mk[k] << (bits - 1 - k) for k in range(bits)] for mk in dims], dtype=np.uint64)
+    i = np.arange(m, dtype=np.uint64)
+    gray = i ^ (i >> np.uint64(1))
+    x = np.zeros((m, 3), dtype=np.uint64)
+    for k in range(bits):
+        on = ((gray >> np.uint64(k)) & np.uint64(1)).astype(bool)
+        x ^= np.where(on[:, None], v[:, k][None, :], np.uint64(0))
+    pts = x.astype(np.float64) / 2.0**bits + 0.5 / m
+    pts.setflags(write=False)
+    return pts
+
+
+class ProgramTable:
+    """Several programs in one set of arrays, for kernels that shade many materials
+    (the integrator): node, child, frame and table indices made absolute.
+
+    Each program keeps its own parameter columns (``BASE`` relative to its row): the
+    caller keeps a parameter array of :attr:`width` columns whose rows it chooses per
+    lane.  Program ``i`` is run with ``root = roots[i]`` and frames
+    ``frame_lo[i] .. frame_hi[i] - 1``.
+
+    Parameters
+    ----------
+    programs : list of Program or None
+        None (a black bsdf or no edf) gets root -1.
+    """
+
+    def __init__(self, programs: list):
+        codes, kids, frames, tables = [], [], [], []
+        self.roots = np.full(len(programs), -1, dtype=np.int64)
+        self.frame_lo = np.zeros(len(programs), dtype=np.int64)
+        self.frame_hi = np.zeros(len(programs), dtype=np.int64)
+        n = k = f = t = 0
+        width = 0
+        for i, p in enumerate(programs):
+            if p is None:
+                continue
+            c = p.code.copy()
+            c[:, KID0] += k
+            c[:, FRAME] += f
+            c[:, LFRAME] += f
+            c[:, TABLE] = np.where(c[:, TABLE] >= 0, c[:, TABLE] + t, c[:, TABLE])
+            codes.append(c)
+            kids.append(np.where(p.kids >= 0, p.kids + n, p.kids))
+            fr = p.frames.copy()
+            fr[:, 0] = np.where(fr[:, 0] >= 0, fr[:, 0] + f, -1)
+            frames.append(fr)
+            tables.append(p.tables)
+            self.roots[i] = n + p.root
+            self.frame_lo[i], self.frame_hi[i] = f, f + len(p.frames)
+            n, k, f, t = n + len(c), k + len(p.kids), f + len(fr), t + len(p.tables)
+            width = max(width, p.P.shape[1])
+        self.code = np.concatenate(codes) if codes else np.zeros((1, NCOL), dtype=np.int64)
+        self.kids = np.concatenate(kids) if kids else np.zeros(0, dtype=np.int64)
+        self.frames = np.concatenate(frames) if frames else np.array([[-1, 0]], dtype=np.int64)
+        self.tables = np.concatenate(tables) if tables else np.zeros(0)
+        #: columns of a parameter row that holds any of the programs
+        self.width = max(width, 1)
+
+
+# ----------------------------------------------------------------------------- adapters
+def _lane_program(program: Program, n: int) -> None:
+    if program.rows not in (1, n):
+        raise ValueError(f"the df holds {program.rows} per-lane values but the call has "
+                         f"{n} lanes")
+
+
+class ProgramBsdf(Bsdf):
+    """A bsdf program over lanes: the :class:`~render.bsdf.Bsdf` interface on the
+    kernels that render (every call runs the compiled interpreter per lane).
+
+    Parameters
+    ----------
+    program : Program
+    """
+
+    def __init__(self, program: Program):
+        self.program = program
+        self.lobes = program.lobes
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.program.code.shape[0]} nodes)"
+
+    def _args(self):
+        p = self.program
+        return p.code, p.kids, p.frames, p.P, p.tables
+
+    def eval_pdf(self, wo, wi):
+        from render import interpreter
+
+        wo, wi = check_dirs(wo, wi)
+        n = len(wo)
+        _lane_program(self.program, n)
+        f, pdf = np.empty((n, 3)), np.empty(n)
+        interpreter.eval_pdf_batch(*self._args(), wo, wi, f, pdf)
+        return f, pdf
+
+    def eval(self, wo, wi):
+        return self.eval_pdf(wo, wi)[0]
+
+    def pdf(self, wo, wi):
+        return self.eval_pdf(wo, wi)[1]
+
+    def sample(self, wo, u1, u2) -> BsdfSample:
+        from render import interpreter
+
+        (wo,) = check_dirs(wo, names=("wo",))
+        n = len(wo)
+        u1, u2 = check_samples(n, u1, u2)
+        _lane_program(self.program, n)
+        wi, pdf, w = np.empty((n, 3)), np.empty(n), np.empty((n, 3))
+        lobe = np.empty(n, dtype=np.int64)
+        interpreter.sample_batch(*self._args(), wo, np.ascontiguousarray(u1),
+                                 np.ascontiguousarray(u2), wi, pdf, w, lobe)
+        return BsdfSample(wi, pdf, w, lobe.astype(np.int32)).checked()
+
+    def albedo(self, wo):
+        from render import interpreter
+
+        (wo,) = check_dirs(wo, names=("wo",))
+        _lane_program(self.program, len(wo))
+        out = np.empty((len(wo), 3))
+        interpreter.albedo_batch(*self._args(), wo, sobol_points(ALBEDO_POINTS), out)
+        return out
+
+    def cheap_albedo(self, wo):
+        """The fast albedo estimate (``render.df.albedo_estimate``)."""
+        from render import interpreter
+
+        (wo,) = check_dirs(wo, names=("wo",))
+        _lane_program(self.program, len(wo))
+        out = np.empty((len(wo), 3))
+        interpreter.cheap_albedo_batch(*self._args(), wo, out)
+        return out
+
+
+class ProgramEdf(Edf):
+    """An edf program over lanes (the :class:`~render.bsdf.Edf` interface)."""
+
+    def __init__(self, program: Program):
+        self.program = program
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.program.code.shape[0]} nodes)"
+
+    def _args(self):
+        p = self.program
+        return p.code, p.kids, p.frames, p.P, p.tables
+
+    def _eval_pdf(self, wo):
+        from render import interpreter
+
+        (wo,) = check_dirs(wo, names=("wo",))
+        n = len(wo)
+        _lane_program(self.program, n)
+        e, pdf = np.empty((n, 3)), np.empty(n)
+        interpreter.edf_eval_pdf_batch(*self._args(), wo, e, pdf)
+        return e, pdf
+
+    def eval(self, wo):
+        return self._eval_pdf(wo)[0]
+
+    def pdf(self, wo):
+        return self._eval_pdf(wo)[1]
+
+    def sample(self, u1, u2) -> EdfSample:
+        from render import interpreter
+
+        n = len(np.asarray(u2))
+        u1, u2 = check_samples(n, u1, u2)
+        _lane_program(self.program, n)
+        wo, pdf, w = np.empty((n, 3)), np.empty(n), np.empty((n, 3))
+        interpreter.edf_sample_batch(*self._args(), np.ascontiguousarray(u1),
+                                     np.ascontiguousarray(u2), wo, pdf, w)
+        return EdfSample(wo, pdf, w)
