@@ -44,16 +44,8 @@ from render.bsdf import (
     lane_float,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import INV_PI, orient
-from render.df._kernel_common import (
-    COS_ZERO,
-    LOBE_DIFFUSE_REFLECTION,
-    clamp_u,
-    cosine_hemisphere,
-    dot3,
-)
-from render.df._kernel_common import mirror_z as k_mirror_z
-from render.df._kernel_common import orient as k_orient
 from render.df._signature import Param, Signature
 from render.frame import mirror_z
 from render.jit import njit
@@ -106,15 +98,15 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz):
     black = t0 == 0.0 and t1 == 0.0 and t2 == 0.0 and m0 == 0.0 and m1 == 0.0 and m2 == 0.0
     mu1 = woz
     mu2 = wiz
-    if not (mu1 > COS_ZERO and mu2 > COS_ZERO) or black:
+    if not (mu1 > kc.COS_ZERO and mu2 > kc.COS_ZERO) or black:
         return 0.0, 0.0, 0.0, False
     if not sigma > 0.0:
         return t0, t1, t2, True  # Lambert
     # Fujii's Oren–Nayar: s / t with t = max(mu1, mu2) where s > 0
     a = 1.0 / (1.0 + _K_C_A * sigma)
     bb = sigma * a
-    s = max(dot3(wox, woy, woz, wix, wiy, wiz) - mu1 * mu2, -1.0)
-    tmax = max(max(mu1, mu2), COS_ZERO)
+    s = max(kc.dot3(wox, woy, woz, wix, wiy, wiz) - mu1 * mu2, -1.0)
+    tmax = max(max(mu1, mu2), kc.COS_ZERO)
     if s > 0.0:
         s = s / tmax
     single = a + bb * s
@@ -135,8 +127,8 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz):
 @njit
 def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     """``eval`` (with ``|cos theta_i|``) and ``pdf`` of one lane -> ``(f0, f1, f2, pdf)``."""
-    flip, woz = k_orient(woz)
-    wiz = k_mirror_z(wiz, flip)
+    flip, woz = kc.orient(woz)
+    wiz = kc.mirror_z(wiz, flip)
     v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0
@@ -147,13 +139,13 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
 @njit
 def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     """Cosine-weighted sample of one lane -> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)``."""
-    flip, woz = k_orient(woz)
-    wix, wiy, wiz = cosine_hemisphere(clamp_u(u2x), clamp_u(u2y))
+    flip, woz = kc.orient(woz)
+    wix, wiy, wiz = kc.cosine_hemisphere(kc.clamp_u(u2x), kc.clamp_u(u2y))
     v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    return (wix, wiy, k_mirror_z(wiz, flip), wiz * INV_PI, v0, v1, v2,
-            LOBE_DIFFUSE_REFLECTION)
+    return (wix, wiy, kc.mirror_z(wiz, flip), wiz * INV_PI, v0, v1, v2,
+            kc.LOBE_DIFFUSE_REFLECTION)
 
 
 @njit
@@ -164,7 +156,7 @@ def albedo(P, row, b, flags, wox, woy, woz):
     m0, m1, m2 = P[row, b + _MS_TINT], P[row, b + _MS_TINT + 1], P[row, b + _MS_TINT + 2]
     black = t0 == 0.0 and t1 == 0.0 and t2 == 0.0 and m0 == 0.0 and m1 == 0.0 and m2 == 0.0
     mu = abs(woz)
-    if not mu > COS_ZERO or black:
+    if not mu > kc.COS_ZERO or black:
         return 0.0, 0.0, 0.0
     a = 1.0 / (1.0 + _K_C_A * sigma)
     g = _g_kernel(mu)
