@@ -34,6 +34,8 @@ Departures from libbsdf, all deliberate:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
@@ -49,7 +51,9 @@ from render.bsdf import (
     lanes,
 )
 from render.df._common import ScatterMode, ior_pair, lane_ior, orient, tangent_axes
+from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED, TRANSMIT
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import (
     ONE_MINUS_EPS,
     TOL,
@@ -65,6 +69,219 @@ __all__ = ["MicrofacetBsdf"]
 
 _TR = int(Lobe.GLOSSY_TRANSMISSION)
 _RE = int(Lobe.GLOSSY_REFLECTION)
+
+# --- kernels (the compiled render core) ----------------------------------------------------
+# The framework's scalar pieces, shared by the microfacet dfs' kernels: the caller orients
+# the lane, evaluates its distribution at the half vector that ``mf_geometry`` returns and
+# finishes with ``mf_finish``; sampling draws a half vector and calls ``mf_sample_dir``.
+# The small vector helpers are private here (render.df._kernel_common was not committed
+# when these were written).  Operation order follows the numpy code (dot sums (x+z)+y).
+
+_COS_ZERO = TOL.cos_zero
+_UNIT_MIN = TOL.unit_min
+_IOR_DELTA_MIN = TOL.ior_delta_min
+_ROUGHNESS_MIN = TOL.roughness_min
+_ONE_MINUS_EPS = ONE_MINUS_EPS
+_REFLECT, _TRANSMIT = REFLECT, TRANSMIT
+_MODE_MASK, _THIN_WALLED = MODE_MASK, THIN_WALLED
+
+
+@njit
+def k_dot(ax, ay, az, bx, by, bz):
+    """``render.numerics.dot`` of one pair, summed as ``(x + z) + y``."""
+    return ax * bx + az * bz + ay * by
+
+
+@njit
+def k_unitize(x, y, z):
+    """``render.numerics.unitize`` of one vector -> ``(ux, uy, uz, valid)``."""
+    scale = max(max(abs(x), abs(y)), abs(z))
+    if not scale > _UNIT_MIN:
+        return 0.0, 0.0, 0.0, False
+    wx = x / scale
+    wy = y / scale
+    wz = z / scale
+    length = math.sqrt(k_dot(wx, wy, wz, wx, wy, wz))
+    return wx / length, wy / length, wz / length, True
+
+
+@njit
+def k_clamp_u(u):
+    """``np.clip(u, 0, ONE_MINUS_EPS)`` (``render.bsdf.check_samples``; NaN gives 0)."""
+    if u > _ONE_MINUS_EPS:
+        return _ONE_MINUS_EPS
+    if u >= 0.0:
+        return u
+    return 0.0
+
+
+@njit
+def k_fresnel(ci, eta):
+    """``render.numerics.fresnel_dielectric(ci, eta)[0]`` for one lane."""
+    e = eta if ci >= 0.0 else 1.0 / eta
+    c = min(abs(ci), 1.0)
+    if e == 1.0:
+        return 0.0  # index-matched
+    ct2 = 1.0 - (1.0 - c * c) / (e * e)
+    if ct2 <= 0.0:
+        return 1.0  # total internal reflection
+    ct = math.sqrt(ct2)
+    den_s = c + e * ct
+    den_p = e * c + ct
+    if not (den_s > 0.0 and den_p > 0.0):
+        return 1.0
+    rs = (c - e * ct) / den_s
+    rp = (e * c - ct) / den_p
+    return min(max(0.5 * (rs * rs + rp * rp), 0.0), 1.0)
+
+
+@njit
+def k_tangent_axes(x, y, z):
+    """``render.df._common.tangent_axes`` of one ``tangent_u`` -> ``(tx, ty, valid)``."""
+    length = math.hypot(x, y)
+    full = math.sqrt(x * x + y * y + z * z)
+    if length > 1e-8 * max(full, _UNIT_MIN):
+        return x / length, y / length, True
+    return 1.0, 0.0, False
+
+
+@njit
+def k_ior_pair_glossy(ior_outside, ior_inside, flip, thin_walled):
+    """``render.df._common.ior_pair(..., glossy=True)`` for one lane -> ``(eta1, eta2)``."""
+    o = ior_outside
+    i = ior_inside
+    d = i - o
+    if abs(d) < _IOR_DELTA_MIN:
+        i = o + (-_IOR_DELTA_MIN if d < 0 else _IOR_DELTA_MIN)
+    if flip and not thin_walled:
+        return i, o
+    return o, i
+
+
+@njit
+def mf_p_reflect(mode, thin_walled, kh1, eta1, eta2):
+    """``MicrofacetBsdf._p_reflect``: probability of reflection given ``kh1 = wo.h``."""
+    if mode == _REFLECT:
+        return 1.0
+    if mode == _TRANSMIT:
+        if thin_walled:
+            return 0.0
+        b = eta1 / eta2
+        return 1.0 if b * b * (1.0 - kh1 * kh1) > 1.0 else 0.0  # total internal reflection
+    return k_fresnel(kh1, eta2 / eta1)
+
+
+@njit
+def mf_geometry(flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz):
+    """The first half of ``MicrofacetBsdf._kernel`` for an oriented lane (``wo.z >= 0``).
+
+    Returns ``(ok, refr, hx, hy, hz, kh1, kh2, P, g1_1, G2)``: the half vector, its
+    cosines with ``wo`` and (mirrored) ``wi``, the event probability and the v-cavities
+    masking terms; the caller evaluates ``D`` at ``h`` (only where ``ok``).
+    """
+    mode = flags & _MODE_MASK
+    thin = (flags & _THIN_WALLED) != 0
+    nk1 = woz
+    tr = wiz < 0.0
+    refr = tr and not thin
+    if not (nk1 > _COS_ZERO and abs(wiz) > _COS_ZERO) or (mode == _REFLECT and tr):
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # half vector: reflection, thin-walled transmission (mirror wi up), refraction
+    k2z = -wiz if tr else wiz
+    if refr:
+        hx, hy, hz, valid = k_unitize(eta1 * wox + eta2 * wix, eta1 * woy + eta2 * wiy,
+                                      eta1 * woz + eta2 * wiz)
+        s = 1.0 if eta1 > eta2 else (-1.0 if eta1 < eta2 else 0.0)
+        hx = hx * s
+        hy = hy * s
+        hz = hz * s
+        kh2 = k_dot(wix, wiy, wiz, hx, hy, hz)
+    else:
+        hx, hy, hz, valid = k_unitize(wox + wix, woy + wiy, woz + k2z)
+        kh2 = k_dot(wix, wiy, k2z, hx, hy, hz)
+    if not valid:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    kh1 = k_dot(wox, woy, woz, hx, hy, hz)
+    if not (hz > _COS_ZERO and kh1 > 0.0 and ((kh2 < 0.0) if refr else (kh2 > 0.0))):
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    p_refl = mf_p_reflect(mode, thin, kh1, eta1, eta2)
+    P = 1.0 - p_refl if tr else p_refl
+    if not P > 0.0:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # v-cavities masking
+    g1_1 = min(1.0, 2.0 * hz * nk1 / kh1)
+    g1_2 = min(1.0, 2.0 * hz * abs(wiz) / abs(kh2))
+    G2 = max(g1_1 + g1_2 - 1.0, 0.0) if refr else min(g1_1, g1_2)
+    if not G2 > 0.0:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return True, refr, hx, hy, hz, kh1, kh2, P, g1_1, G2
+
+
+@njit
+def mf_finish(D, refr, nk1, kh1, kh2, eta1, eta2, P, g1_1, G2, t0, t1, t2):
+    """The second half of ``MicrofacetBsdf._kernel``: ``D = D(h)`` -> ``(w0, w1, w2, pdf)``
+    (weight = eval / pdf; all 0 where the lobe does not reach)."""
+    if refr:
+        den = eta1 * kh1 + eta2 * kh2
+        pdf0 = D * kh1 * abs(kh2) * eta2 * eta2 / (nk1 * (den * den))
+    else:
+        pdf0 = D / (4.0 * nk1)
+    pdf = P * g1_1 * pdf0
+    r = G2 / g1_1
+    w0 = t0 * r
+    w1 = t1 * r
+    w2 = t2 * r
+    # pdf > 0 exactly where eval = weight * pdf > 0 (also where the product underflows)
+    if not max(max(w0 * pdf, w1 * pdf), w2 * pdf) > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return w0, w1, w2, pdf
+
+
+@njit
+def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
+    """``MicrofacetBsdf.sample`` from a half vector drawn from ``D (n.h)`` (local frame)
+    to ``wi``, for an oriented lane: the v-cavities flip, the event, reflect or refract.
+
+    Returns ``(ok, wix, wiy, wiz)``.
+    """
+    mode = flags & _MODE_MASK
+    thin = (flags & _THIN_WALLED) != 0
+    # v-cavities: the facet rotated by pi about n, chosen with prob. ~ max(0, wo.h')
+    a = max(k_dot(wox, woy, woz, hx, hy, hz), 0.0)
+    a_alt = max(k_dot(wox, woy, woz, -hx, -hy, hz), 0.0)
+    tot = a + a_alt
+    if not tot > 0.0:
+        return False, 0.0, 0.0, 0.0
+    q = a_alt / tot
+    take_alt = u1 < q
+    # reuse u1 for the event choice
+    if take_alt:
+        u1 = u1 / (q if q > 0 else 1.0)
+        hx = -hx
+        hy = -hy
+    else:
+        u1 = (u1 - q) / (1.0 - q if q < 1 else 1.0)
+    u1 = min(max(u1, 0.0), _ONE_MINUS_EPS)
+    c = k_dot(wox, woy, woz, hx, hy, hz)
+    if not c > 0.0:
+        return False, 0.0, 0.0, 0.0
+    refl = u1 < mf_p_reflect(mode, thin, c, eta1, eta2)
+    two_c = 2.0 * c
+    wix = two_c * hx - wox
+    wiy = two_c * hy - woy
+    wiz = two_c * hz - woz
+    if not refl:
+        if thin:
+            wiz = -wiz
+        else:
+            # refraction about h with b = eta1/eta2 (never total internal: then refl is True)
+            b = eta1 / eta2
+            ct = math.sqrt(max(1.0 - b * b * (1.0 - c * c), 0.0))
+            f = b * c - ct
+            wix, wiy, wiz, _ = k_unitize(-b * wox + f * hx, -b * woy + f * hy, -b * woz + f * hz)
+    if not ((wiz > 0.0) if refl else (wiz < 0.0)):
+        return False, 0.0, 0.0, 0.0
+    return True, wix, wiy, wiz
 
 
 class MicrofacetBsdf(Bsdf):
