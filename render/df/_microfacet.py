@@ -50,6 +50,7 @@ from render.bsdf import (
     lane_vector,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import ScatterMode, ior_pair, lane_ior, orient, tangent_axes
 from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED, TRANSMIT
 from render.frame import mirror_z
@@ -74,88 +75,10 @@ _RE = int(Lobe.GLOSSY_REFLECTION)
 # The framework's scalar pieces, shared by the microfacet dfs' kernels: the caller orients
 # the lane, evaluates its distribution at the half vector that ``mf_geometry`` returns and
 # finishes with ``mf_finish``; sampling draws a half vector and calls ``mf_sample_dir``.
-# The small vector helpers are private here (render.df._kernel_common was not committed
-# when these were written).  Operation order follows the numpy code (dot sums (x+z)+y).
+# Operation order follows the numpy code (same bits; dot products sum (x + z) + y).
 
-_COS_ZERO = TOL.cos_zero
-_UNIT_MIN = TOL.unit_min
-_IOR_DELTA_MIN = TOL.ior_delta_min
-_ROUGHNESS_MIN = TOL.roughness_min
-_ONE_MINUS_EPS = ONE_MINUS_EPS
 _REFLECT, _TRANSMIT = REFLECT, TRANSMIT
 _MODE_MASK, _THIN_WALLED = MODE_MASK, THIN_WALLED
-
-
-@njit
-def k_dot(ax, ay, az, bx, by, bz):
-    """``render.numerics.dot`` of one pair, summed as ``(x + z) + y``."""
-    return ax * bx + az * bz + ay * by
-
-
-@njit
-def k_unitize(x, y, z):
-    """``render.numerics.unitize`` of one vector -> ``(ux, uy, uz, valid)``."""
-    scale = max(max(abs(x), abs(y)), abs(z))
-    if not scale > _UNIT_MIN:
-        return 0.0, 0.0, 0.0, False
-    wx = x / scale
-    wy = y / scale
-    wz = z / scale
-    length = math.sqrt(k_dot(wx, wy, wz, wx, wy, wz))
-    return wx / length, wy / length, wz / length, True
-
-
-@njit
-def k_clamp_u(u):
-    """``np.clip(u, 0, ONE_MINUS_EPS)`` (``render.bsdf.check_samples``; NaN gives 0)."""
-    if u > _ONE_MINUS_EPS:
-        return _ONE_MINUS_EPS
-    if u >= 0.0:
-        return u
-    return 0.0
-
-
-@njit
-def k_fresnel(ci, eta):
-    """``render.numerics.fresnel_dielectric(ci, eta)[0]`` for one lane."""
-    e = eta if ci >= 0.0 else 1.0 / eta
-    c = min(abs(ci), 1.0)
-    if e == 1.0:
-        return 0.0  # index-matched
-    ct2 = 1.0 - (1.0 - c * c) / (e * e)
-    if ct2 <= 0.0:
-        return 1.0  # total internal reflection
-    ct = math.sqrt(ct2)
-    den_s = c + e * ct
-    den_p = e * c + ct
-    if not (den_s > 0.0 and den_p > 0.0):
-        return 1.0
-    rs = (c - e * ct) / den_s
-    rp = (e * c - ct) / den_p
-    return min(max(0.5 * (rs * rs + rp * rp), 0.0), 1.0)
-
-
-@njit
-def k_tangent_axes(x, y, z):
-    """``render.df._common.tangent_axes`` of one ``tangent_u`` -> ``(tx, ty, valid)``."""
-    length = math.hypot(x, y)
-    full = math.sqrt(x * x + y * y + z * z)
-    if length > 1e-8 * max(full, _UNIT_MIN):
-        return x / length, y / length, True
-    return 1.0, 0.0, False
-
-
-@njit
-def k_ior_pair_glossy(ior_outside, ior_inside, flip, thin_walled):
-    """``render.df._common.ior_pair(..., glossy=True)`` for one lane -> ``(eta1, eta2)``."""
-    o = ior_outside
-    i = ior_inside
-    d = i - o
-    if abs(d) < _IOR_DELTA_MIN:
-        i = o + (-_IOR_DELTA_MIN if d < 0 else _IOR_DELTA_MIN)
-    if flip and not thin_walled:
-        return i, o
-    return o, i
 
 
 @njit
@@ -168,7 +91,7 @@ def mf_p_reflect(mode, thin_walled, kh1, eta1, eta2):
             return 0.0
         b = eta1 / eta2
         return 1.0 if b * b * (1.0 - kh1 * kh1) > 1.0 else 0.0  # total internal reflection
-    return k_fresnel(kh1, eta2 / eta1)
+    return kc.fresnel_dielectric(kh1, eta2 / eta1)[0]
 
 
 @njit
@@ -184,25 +107,25 @@ def mf_geometry(flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz):
     nk1 = woz
     tr = wiz < 0.0
     refr = tr and not thin
-    if not (nk1 > _COS_ZERO and abs(wiz) > _COS_ZERO) or (mode == _REFLECT and tr):
+    if not (nk1 > kc.COS_ZERO and abs(wiz) > kc.COS_ZERO) or (mode == _REFLECT and tr):
         return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     # half vector: reflection, thin-walled transmission (mirror wi up), refraction
     k2z = -wiz if tr else wiz
     if refr:
-        hx, hy, hz, valid = k_unitize(eta1 * wox + eta2 * wix, eta1 * woy + eta2 * wiy,
+        hx, hy, hz, valid = kc.unitize(eta1 * wox + eta2 * wix, eta1 * woy + eta2 * wiy,
                                       eta1 * woz + eta2 * wiz)
         s = 1.0 if eta1 > eta2 else (-1.0 if eta1 < eta2 else 0.0)
         hx = hx * s
         hy = hy * s
         hz = hz * s
-        kh2 = k_dot(wix, wiy, wiz, hx, hy, hz)
+        kh2 = kc.dot3(wix, wiy, wiz, hx, hy, hz)
     else:
-        hx, hy, hz, valid = k_unitize(wox + wix, woy + wiy, woz + k2z)
-        kh2 = k_dot(wix, wiy, k2z, hx, hy, hz)
+        hx, hy, hz, valid = kc.unitize(wox + wix, woy + wiy, woz + k2z)
+        kh2 = kc.dot3(wix, wiy, k2z, hx, hy, hz)
     if not valid:
         return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    kh1 = k_dot(wox, woy, woz, hx, hy, hz)
-    if not (hz > _COS_ZERO and kh1 > 0.0 and ((kh2 < 0.0) if refr else (kh2 > 0.0))):
+    kh1 = kc.dot3(wox, woy, woz, hx, hy, hz)
+    if not (hz > kc.COS_ZERO and kh1 > 0.0 and ((kh2 < 0.0) if refr else (kh2 > 0.0))):
         return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     p_refl = mf_p_reflect(mode, thin, kh1, eta1, eta2)
     P = 1.0 - p_refl if tr else p_refl
@@ -247,8 +170,8 @@ def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
     mode = flags & _MODE_MASK
     thin = (flags & _THIN_WALLED) != 0
     # v-cavities: the facet rotated by pi about n, chosen with prob. ~ max(0, wo.h')
-    a = max(k_dot(wox, woy, woz, hx, hy, hz), 0.0)
-    a_alt = max(k_dot(wox, woy, woz, -hx, -hy, hz), 0.0)
+    a = max(kc.dot3(wox, woy, woz, hx, hy, hz), 0.0)
+    a_alt = max(kc.dot3(wox, woy, woz, -hx, -hy, hz), 0.0)
     tot = a + a_alt
     if not tot > 0.0:
         return False, 0.0, 0.0, 0.0
@@ -261,8 +184,8 @@ def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
         hy = -hy
     else:
         u1 = (u1 - q) / (1.0 - q if q < 1 else 1.0)
-    u1 = min(max(u1, 0.0), _ONE_MINUS_EPS)
-    c = k_dot(wox, woy, woz, hx, hy, hz)
+    u1 = min(max(u1, 0.0), kc.ONE_MINUS_EPS)
+    c = kc.dot3(wox, woy, woz, hx, hy, hz)
     if not c > 0.0:
         return False, 0.0, 0.0, 0.0
     refl = u1 < mf_p_reflect(mode, thin, c, eta1, eta2)
@@ -278,7 +201,7 @@ def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
             b = eta1 / eta2
             ct = math.sqrt(max(1.0 - b * b * (1.0 - c * c), 0.0))
             f = b * c - ct
-            wix, wiy, wiz, _ = k_unitize(-b * wox + f * hx, -b * woy + f * hy, -b * woz + f * hz)
+            wix, wiy, wiz, _ = kc.unitize(-b * wox + f * hx, -b * woy + f * hy, -b * woz + f * hz)
     if not ((wiz > 0.0) if refl else (wiz < 0.0)):
         return False, 0.0, 0.0, 0.0
     return True, wix, wiy, wiz

@@ -46,15 +46,8 @@ from render.bsdf import (
     lane_vector,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import orient, tangent_axes
-from render.df._microfacet import (
-    _COS_ZERO,
-    _ROUGHNESS_MIN,
-    k_clamp_u,
-    k_dot,
-    k_tangent_axes,
-    k_unitize,
-)
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
 from render.frame import mirror_z
@@ -71,8 +64,8 @@ __all__ = [
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
 SIGNATURE = Signature("bsdf", (
-    Param("roughness_u", "float", REQUIRED, clamp=(_ROUGHNESS_MIN, None)),
-    Param("roughness_v", "float", "roughness_u", clamp=(_ROUGHNESS_MIN, None)),
+    Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     # not implemented (as the numpy class): the packer refuses non-zero values
     Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
@@ -116,9 +109,9 @@ def _k_p_half(kx, ky, kz, hx, hy, hz, e_u, e_v, tx, ty):
 @njit
 def _setup(P, row, b):
     """``_setup`` for one lane -> ``(ok, e_u, e_v, tx, ty)``."""
-    ru = max(P[row, b + _RU], _ROUGHNESS_MIN)
-    rv = max(P[row, b + _RV], _ROUGHNESS_MIN)
-    tx, ty, ok = k_tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
+    ru = max(P[row, b + _RU], kc.ROUGHNESS_MIN)
+    rv = max(P[row, b + _RV], kc.ROUGHNESS_MIN)
+    tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
     if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
         ok = False
@@ -130,11 +123,11 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty):
     """``_kernel`` for an oriented lane -> ``(w0, w1, w2, pdf)`` (0 where it does not reach)."""
     nk1 = woz
     nk2 = wiz
-    if not (nk1 > _COS_ZERO and nk2 > _COS_ZERO):
+    if not (nk1 > kc.COS_ZERO and nk2 > kc.COS_ZERO):
         return 0.0, 0.0, 0.0, 0.0
-    hx, hy, hz, hv = k_unitize(wox + wix, woy + wiy, woz + wiz)
-    kh = k_dot(wox, woy, woz, hx, hy, hz)
-    if not (hv and hz > _COS_ZERO and kh > 0.0):
+    hx, hy, hz, hv = kc.unitize(wox + wix, woy + wiy, woz + wiz)
+    kh = kc.dot3(wox, woy, woz, hx, hy, hz)
+    if not (hv and hz > kc.COS_ZERO and kh > 0.0):
         return 0.0, 0.0, 0.0, 0.0
     p1 = _k_p_half(wox, woy, woz, hx, hy, hz, e_u, e_v, tx, ty)
     p2 = _k_p_half(wix, wiy, wiz, hx, hy, hz, e_u, e_v, tx, ty)
@@ -168,8 +161,8 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
 @njit
 def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u2x = k_clamp_u(u2x)
-    u2y = k_clamp_u(u2y)
+    u2x = kc.clamp_u(u2x)
+    u2y = kc.clamp_u(u2y)
     flip = woz < 0.0
     if flip:
         woz = -woz
@@ -183,10 +176,10 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     # half vector through the disk point placed at wo's tip; wi mirrors wo about it
     at = r * cp + (wox * tx + woy * ty)
     ab = r * sp + (wox * ty - woy * tx)
-    hx, hy, hz, hv = k_unitize(at * tx + ab * ty, at * ty - ab * tx, woz)
-    if not (hv and woz > _COS_ZERO):
+    hx, hy, hz, hv = kc.unitize(at * tx + ab * ty, at * ty - ab * tx, woz)
+    if not (hv and woz > kc.COS_ZERO):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    two_c = 2.0 * k_dot(wox, woy, woz, hx, hy, hz)
+    two_c = 2.0 * kc.dot3(wox, woy, woz, hx, hy, hz)
     wix = two_c * hx - wox
     wiy = two_c * hy - woy
     wiz = two_c * hz - woz

@@ -45,16 +45,8 @@ import numpy as np
 
 from render._typing import Arr, Arr2
 from render.bsdf import Lobe
-from render.df._microfacet import (
-    _ROUGHNESS_MIN,
-    MicrofacetBsdf,
-    k_clamp_u,
-    k_ior_pair_glossy,
-    k_tangent_axes,
-    mf_finish,
-    mf_geometry,
-    mf_sample_dir,
-)
+from render.df import _kernel_common as kc
+from render.df._microfacet import MicrofacetBsdf, mf_finish, mf_geometry, mf_sample_dir
 from render.df._signature import MODE_MASK, REFLECT, REQUIRED, THIN_WALLED, Param, Signature
 from render.jit import njit
 
@@ -69,8 +61,8 @@ __all__ = [
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
 SIGNATURE = Signature("bsdf", (
-    Param("roughness_u", "float", REQUIRED, clamp=(_ROUGHNESS_MIN, None)),
-    Param("roughness_v", "float", "roughness_u", clamp=(_ROUGHNESS_MIN, None)),
+    Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     # not implemented (as the numpy class): the packer refuses non-zero values
     Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
@@ -95,8 +87,8 @@ _MODE_MASK_, _REFLECT_, _THIN_ = MODE_MASK, REFLECT, THIN_WALLED
 @njit
 def as_exponents(ru, rv):
     """``AshikhminShirley.__init__``: ``(e_u, e_v, norm)`` (roughness clamped at 1e-7)."""
-    ru = max(ru, _ROUGHNESS_MIN)
-    rv = max(rv, _ROUGHNESS_MIN)
+    ru = max(ru, kc.ROUGHNESS_MIN)
+    rv = max(rv, kc.ROUGHNESS_MIN)
     e_u = 2.0 / (ru * ru)
     e_v = 2.0 / (rv * rv)
     return e_u, e_v, math.sqrt((e_u + 1.0) * (e_v + 1.0)) / _TWO_PI
@@ -148,7 +140,7 @@ def as_sample(e_u, e_v, u0, u1):
 def _setup(P, row, b, flags, flip):
     """``MicrofacetBsdf._setup`` for one lane -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2)``."""
     e_u, e_v, norm = as_exponents(P[row, b + _RU], P[row, b + _RV])
-    tx, ty, ok = k_tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
+    tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
     if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
         ok = False
@@ -156,7 +148,7 @@ def _setup(P, row, b, flags, flip):
     i = P[row, b + _IOR_IN]
     if not (o > 0.0 and i > 0.0):
         ok = False  # not an IOR (the packer and the numpy class refuse it)
-    eta1, eta2 = k_ior_pair_glossy(o, i, flip, (flags & _THIN_) != 0)
+    eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_) != 0, True)
     return ok, e_u, e_v, norm, tx, ty, eta1, eta2
 
 
@@ -193,9 +185,9 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
 @njit
 def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u1 = k_clamp_u(u1)
-    u2x = k_clamp_u(u2x)
-    u2y = k_clamp_u(u2y)
+    u1 = kc.clamp_u(u1)
+    u2x = kc.clamp_u(u2x)
+    u2y = kc.clamp_u(u2y)
     flip = woz < 0.0
     if flip:
         woz = -woz
