@@ -34,6 +34,8 @@ Departures from libbsdf, all deliberate:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
@@ -48,8 +50,11 @@ from render.bsdf import (
     lane_vector,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import ScatterMode, ior_pair, lane_ior, orient, tangent_axes
+from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED, TRANSMIT
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import (
     ONE_MINUS_EPS,
     TOL,
@@ -65,6 +70,141 @@ __all__ = ["MicrofacetBsdf"]
 
 _TR = int(Lobe.GLOSSY_TRANSMISSION)
 _RE = int(Lobe.GLOSSY_REFLECTION)
+
+# --- kernels (the compiled render core) ----------------------------------------------------
+# The framework's scalar pieces, shared by the microfacet dfs' kernels: the caller orients
+# the lane, evaluates its distribution at the half vector that ``mf_geometry`` returns and
+# finishes with ``mf_finish``; sampling draws a half vector and calls ``mf_sample_dir``.
+# Operation order follows the numpy code (same bits; dot products sum (x + z) + y).
+
+_REFLECT, _TRANSMIT = REFLECT, TRANSMIT
+_MODE_MASK, _THIN_WALLED = MODE_MASK, THIN_WALLED
+
+
+@njit
+def mf_p_reflect(mode, thin_walled, kh1, eta1, eta2):
+    """``MicrofacetBsdf._p_reflect``: probability of reflection given ``kh1 = wo.h``."""
+    if mode == _REFLECT:
+        return 1.0
+    if mode == _TRANSMIT:
+        if thin_walled:
+            return 0.0
+        b = eta1 / eta2
+        return 1.0 if b * b * (1.0 - kh1 * kh1) > 1.0 else 0.0  # total internal reflection
+    return kc.fresnel_dielectric(kh1, eta2 / eta1)[0]
+
+
+@njit
+def mf_geometry(flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz):
+    """The first half of ``MicrofacetBsdf._kernel`` for an oriented lane (``wo.z >= 0``).
+
+    Returns ``(ok, refr, hx, hy, hz, kh1, kh2, P, g1_1, G2)``: the half vector, its
+    cosines with ``wo`` and (mirrored) ``wi``, the event probability and the v-cavities
+    masking terms; the caller evaluates ``D`` at ``h`` (only where ``ok``).
+    """
+    mode = flags & _MODE_MASK
+    thin = (flags & _THIN_WALLED) != 0
+    nk1 = woz
+    tr = wiz < 0.0
+    refr = tr and not thin
+    if not (nk1 > kc.COS_ZERO and abs(wiz) > kc.COS_ZERO) or (mode == _REFLECT and tr):
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # half vector: reflection, thin-walled transmission (mirror wi up), refraction
+    k2z = -wiz if tr else wiz
+    if refr:
+        hx, hy, hz, valid = kc.unitize(eta1 * wox + eta2 * wix, eta1 * woy + eta2 * wiy,
+                                      eta1 * woz + eta2 * wiz)
+        s = 1.0 if eta1 > eta2 else (-1.0 if eta1 < eta2 else 0.0)
+        hx = hx * s
+        hy = hy * s
+        hz = hz * s
+        kh2 = kc.dot3(wix, wiy, wiz, hx, hy, hz)
+    else:
+        hx, hy, hz, valid = kc.unitize(wox + wix, woy + wiy, woz + k2z)
+        kh2 = kc.dot3(wix, wiy, k2z, hx, hy, hz)
+    if not valid:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    kh1 = kc.dot3(wox, woy, woz, hx, hy, hz)
+    if not (hz > kc.COS_ZERO and kh1 > 0.0 and ((kh2 < 0.0) if refr else (kh2 > 0.0))):
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    p_refl = mf_p_reflect(mode, thin, kh1, eta1, eta2)
+    P = 1.0 - p_refl if tr else p_refl
+    if not P > 0.0:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # v-cavities masking
+    g1_1 = min(1.0, 2.0 * hz * nk1 / kh1)
+    g1_2 = min(1.0, 2.0 * hz * abs(wiz) / abs(kh2))
+    G2 = max(g1_1 + g1_2 - 1.0, 0.0) if refr else min(g1_1, g1_2)
+    if not G2 > 0.0:
+        return False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return True, refr, hx, hy, hz, kh1, kh2, P, g1_1, G2
+
+
+@njit
+def mf_finish(D, refr, nk1, kh1, kh2, eta1, eta2, P, g1_1, G2, t0, t1, t2):
+    """The second half of ``MicrofacetBsdf._kernel``: ``D = D(h)`` -> ``(w0, w1, w2, pdf)``
+    (weight = eval / pdf; all 0 where the lobe does not reach)."""
+    if refr:
+        den = eta1 * kh1 + eta2 * kh2
+        pdf0 = D * kh1 * abs(kh2) * eta2 * eta2 / (nk1 * (den * den))
+    else:
+        pdf0 = D / (4.0 * nk1)
+    pdf = P * g1_1 * pdf0
+    r = G2 / g1_1
+    w0 = t0 * r
+    w1 = t1 * r
+    w2 = t2 * r
+    # pdf > 0 exactly where eval = weight * pdf > 0 (also where the product underflows)
+    if not max(max(w0 * pdf, w1 * pdf), w2 * pdf) > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return w0, w1, w2, pdf
+
+
+@njit
+def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
+    """``MicrofacetBsdf.sample`` from a half vector drawn from ``D (n.h)`` (local frame)
+    to ``wi``, for an oriented lane: the v-cavities flip, the event, reflect or refract.
+
+    Returns ``(ok, wix, wiy, wiz)``.
+    """
+    mode = flags & _MODE_MASK
+    thin = (flags & _THIN_WALLED) != 0
+    # v-cavities: the facet rotated by pi about n, chosen with prob. ~ max(0, wo.h')
+    a = max(kc.dot3(wox, woy, woz, hx, hy, hz), 0.0)
+    a_alt = max(kc.dot3(wox, woy, woz, -hx, -hy, hz), 0.0)
+    tot = a + a_alt
+    if not tot > 0.0:
+        return False, 0.0, 0.0, 0.0
+    q = a_alt / tot
+    take_alt = u1 < q
+    # reuse u1 for the event choice
+    if take_alt:
+        u1 = u1 / (q if q > 0 else 1.0)
+        hx = -hx
+        hy = -hy
+    else:
+        u1 = (u1 - q) / (1.0 - q if q < 1 else 1.0)
+    u1 = min(max(u1, 0.0), kc.ONE_MINUS_EPS)
+    c = kc.dot3(wox, woy, woz, hx, hy, hz)
+    if not c > 0.0:
+        return False, 0.0, 0.0, 0.0
+    refl = u1 < mf_p_reflect(mode, thin, c, eta1, eta2)
+    two_c = 2.0 * c
+    wix = two_c * hx - wox
+    wiy = two_c * hy - woy
+    wiz = two_c * hz - woz
+    if not refl:
+        if thin:
+            wiz = -wiz
+        else:
+            # refraction about h with b = eta1/eta2 (never total internal: then refl is True)
+            b = eta1 / eta2
+            ct = math.sqrt(max(1.0 - b * b * (1.0 - c * c), 0.0))
+            f = b * c - ct
+            wix, wiy, wiz, _ = kc.unitize(-b * wox + f * hx, -b * woy + f * hy, -b * woz + f * hz)
+    if not ((wiz > 0.0) if refl else (wiz < 0.0)):
+        return False, 0.0, 0.0, 0.0
+    return True, wix, wiy, wiz
 
 
 class MicrofacetBsdf(Bsdf):

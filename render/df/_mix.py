@@ -51,9 +51,17 @@ from render.df._combine import (
     selection,
     union_lobes,
 )
+from render.df._signature import REQUIRED, Param, Signature
 from render.numerics import check_finite
 
 __all__ = [
+    "BSDF_COMPONENT_SIGNATURE",
+    "COLOR_BSDF_COMPONENT_SIGNATURE",
+    "EDF_COMPONENT_SIGNATURE",
+    "COLOR_EDF_COMPONENT_SIGNATURE",
+    "component_signature",
+    "mix_signatures",
+    "COMPONENT_WIDTH",
     "BsdfComponent",
     "bsdf_component",
     "ColorBsdfComponent",
@@ -66,6 +74,43 @@ __all__ = [
     "MixEdf",
     "as_components",
 ]
+
+
+# --- signatures of the component structs (the compiled render core) -------------------
+# A mix node's slots are its k components' weights, each packed as a colour (a float
+# weight broadcast to 3 slots), in component order: component i's weight at
+# ``b + 3 i`` (3 k slots; the mix's own signature packs nothing).  The mixes' kernels
+# (``mix_weights`` in normalized_mix.py and clamped_mix.py) clamp or normalise them, so
+# the packer writes the weights as given (no clamp).
+
+#: MDL's ``struct bsdf_component { float weight = 0.0; bsdf component = bsdf(); }``
+BSDF_COMPONENT_SIGNATURE = Signature("bsdf_component", (
+    Param("weight", "float", 0.0, packed="color"), Param("component", "bsdf", None)))
+#: MDL's ``struct color_bsdf_component { color weight = color(0.0); bsdf component; }``
+COLOR_BSDF_COMPONENT_SIGNATURE = Signature("color_bsdf_component", (
+    Param("weight", "color", (0.0, 0.0, 0.0)), Param("component", "bsdf", None)))
+#: MDL's ``struct edf_component { float weight = 0.0; edf component = edf(); }``
+EDF_COMPONENT_SIGNATURE = Signature("edf_component", (
+    Param("weight", "float", 0.0, packed="color"), Param("component", "edf", None)))
+#: MDL's ``struct color_edf_component { color weight = color(0.0); edf component; }``
+COLOR_EDF_COMPONENT_SIGNATURE = Signature("color_edf_component", (
+    Param("weight", "color", (0.0, 0.0, 0.0)), Param("component", "edf", None)))
+#: slots of one packed component (its weight as a colour)
+COMPONENT_WIDTH = 3
+
+
+def component_signature(color: bool, edf: bool) -> Signature:
+    """The signature of a mix's component struct (``color_``, ``edf_`` variants)."""
+    return ((COLOR_EDF_COMPONENT_SIGNATURE if edf else COLOR_BSDF_COMPONENT_SIGNATURE)
+            if color else (EDF_COMPONENT_SIGNATURE if edf else BSDF_COMPONENT_SIGNATURE))
+
+
+def mix_signatures() -> tuple[Signature, Signature, Signature, Signature]:
+    """A mix's overloads ``(bsdf, color bsdf, edf, color edf)``: one parameter, the
+    component array (``bsdf_component[<N>]`` ...), no slots of its own."""
+    return tuple(
+        Signature(kind, (Param("components", f"{c}{kind}_component[]", REQUIRED),))
+        for kind, c in (("bsdf", ""), ("bsdf", "color_"), ("edf", ""), ("edf", "color_")))
 
 
 class BsdfComponent:

@@ -77,6 +77,14 @@ class Param:
         Applied per component when packing (``None`` bounds are open).
     uniform : bool
         MDL ``uniform``.
+    packed : str or None
+        The type the packer writes when it differs from ``type``: ``"color"`` for a
+        ``float`` broadcast to three slots, so one kernel serves a df's float and colour
+        forms (``weighted_layer`` and ``color_weighted_layer``).
+    mdl : bool
+        False for a slot that is not an MDL parameter of this form (the parser never
+        offers it; the packer writes its default): it keeps the float form's slot layout
+        equal to the colour form's (``f82_factor`` of ``custom_curve_layer``).
     """
 
     name: str
@@ -84,11 +92,13 @@ class Param:
     default: object = REQUIRED
     clamp: tuple | None = None
     uniform: bool = False
+    packed: str | None = None
+    mdl: bool = True
 
     @property
     def width(self) -> int:
         """Slots taken when packed (0: not packed)."""
-        return 0 if self.name == "handle" else WIDTH.get(self.type, 0)
+        return 0 if self.name == "handle" else WIDTH.get(self.packed or self.type, 0)
 
 
 @dataclass(frozen=True)

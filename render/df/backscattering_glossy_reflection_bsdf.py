@@ -30,6 +30,8 @@ tabulated (``_albedo``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
@@ -44,11 +46,151 @@ from render.bsdf import (
     lane_vector,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import orient, tangent_axes
+from render.df._signature import REQUIRED, Param, Signature
+from render.df.simple_glossy_bsdf import as_azimuth
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import TOL, check_finite, dot, saturate, unitize
 
-__all__ = ["BackscatteringGlossyReflectionBsdf", "backscattering_glossy_reflection_bsdf"]
+__all__ = [
+    "BackscatteringGlossyReflectionBsdf",
+    "backscattering_glossy_reflection_bsdf",
+    "SIGNATURE",
+    "eval_pdf",
+    "sample",
+]
+
+# --- signature and kernels (the compiled render core) ---------------------------------------
+SIGNATURE = Signature("bsdf", (
+    Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    # not implemented (as the numpy class): the packer refuses non-zero values
+    Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
+    Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
+    Param("handle", "string", "", uniform=True),
+))
+_RU = SIGNATURE.offset("roughness_u")
+_RV = SIGNATURE.offset("roughness_v")
+_TINT = SIGNATURE.offset("tint")
+_TANGENT = SIGNATURE.offset("tangent_u")
+_PI = math.pi
+_GLOSSY_R = int(Lobe.GLOSSY_REFLECTION)
+
+
+@njit
+def _k_p_disk(x, y, e_u, e_v):
+    """``_p_disk`` for one point (0 outside the unit disk)."""
+    r2 = x * x + y * y
+    if not r2 < 1.0:
+        return 0.0
+    ratio = math.log1p(-r2) / r2 if r2 > 0.0 else -1.0
+    expo = (e_u * x * x + e_v * y * y) * ratio
+    norm = math.sqrt((e_u + 1.0) * (e_v + 1.0)) / _PI
+    return norm * math.exp(expo)
+
+
+@njit
+def _k_p_half(kx, ky, kz, hx, hy, hz, e_u, e_v, tx, ty):
+    """``BackscatteringGlossyReflectionBsdf._p_half`` for one lane."""
+    kt = kx * tx + ky * ty
+    kb = kx * ty - ky * tx
+    ht = hx * tx + hy * ty
+    hb = hx * ty - hy * tx
+    # the disk point can lie in the unit disk only if nk/nh <= 2/|h_tan| (+ rounding)
+    if not kz * math.hypot(ht, hb) <= 4.0 * hz:
+        return 0.0
+    d = kz / hz
+    return _k_p_disk(d * ht - kt, d * hb - kb, e_u, e_v) * d * d / hz
+
+
+@njit
+def _setup(P, row, b):
+    """``_setup`` for one lane -> ``(ok, e_u, e_v, tx, ty)``."""
+    ru = max(P[row, b + _RU], kc.ROUGHNESS_MIN)
+    rv = max(P[row, b + _RV], kc.ROUGHNESS_MIN)
+    tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
+                                P[row, b + _TANGENT + 2])
+    if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
+        ok = False
+    return ok, 2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty
+
+
+@njit
+def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty):
+    """``_kernel`` for an oriented lane -> ``(w0, w1, w2, pdf)`` (0 where it does not reach)."""
+    nk1 = woz
+    nk2 = wiz
+    if not (nk1 > kc.COS_ZERO and nk2 > kc.COS_ZERO):
+        return 0.0, 0.0, 0.0, 0.0
+    hx, hy, hz, hv = kc.unitize(wox + wix, woy + wiy, woz + wiz)
+    kh = kc.dot3(wox, woy, woz, hx, hy, hz)
+    if not (hv and hz > kc.COS_ZERO and kh > 0.0):
+        return 0.0, 0.0, 0.0, 0.0
+    p1 = _k_p_half(wox, woy, woz, hx, hy, hz, e_u, e_v, tx, ty)
+    p2 = _k_p_half(wix, wiy, wiz, hx, hy, hz, e_u, e_v, tx, ty)
+    pmin = min(p1, p2)
+    if not (pmin > 0.0 and p1 > 0.0):
+        return 0.0, 0.0, 0.0, 0.0
+    pdf = p1 / (4.0 * kh)
+    # (min(p1, p2)/p1) (nk2 / max(nk1, nk2)): two ratios <= 1, no underflowing product
+    ratio = (pmin / p1) * (nk2 / max(nk1, nk2))
+    w0 = P[row, b + _TINT] * ratio
+    w1 = P[row, b + _TINT + 1] * ratio
+    w2 = P[row, b + _TINT + 2] * ratio
+    if not max(max(w0 * pdf, w1 * pdf), w2 * pdf) > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return w0, w1, w2, pdf
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
+    if woz < 0.0:  # orient: mirror both through the tangent plane
+        woz = -woz
+        wiz = -wiz
+    ok, e_u, e_v, tx, ty = _setup(P, row, b)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0
+    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
+    return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
+    u2x = kc.clamp_u(u2x)
+    u2y = kc.clamp_u(u2y)
+    flip = woz < 0.0
+    if flip:
+        woz = -woz
+    ok, e_u, e_v, tx, ty = _setup(P, row, b)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    # a point of the anisotropic disk: phi as Ashikhmin–Shirley, r^2 = 1 - (1-u)^(1/(e+1))
+    cp, sp = as_azimuth(e_u, e_v, u2x)
+    e = e_u * cp * cp + e_v * sp * sp
+    r = math.sqrt(max(-math.expm1(math.log1p(-u2y) / (e + 1.0)), 0.0))
+    # half vector through the disk point placed at wo's tip; wi mirrors wo about it
+    at = r * cp + (wox * tx + woy * ty)
+    ab = r * sp + (wox * ty - woy * tx)
+    hx, hy, hz, hv = kc.unitize(at * tx + ab * ty, at * ty - ab * tx, woz)
+    if not (hv and woz > kc.COS_ZERO):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    two_c = 2.0 * kc.dot3(wox, woy, woz, hx, hy, hz)
+    wix = two_c * hx - wox
+    wiy = two_c * hy - woy
+    wiz = two_c * hz - woz
+    if not wiz > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
+    if not pdf > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    if flip:
+        wiz = -wiz
+    return wix, wiy, wiz, pdf, w0, w1, w2, _GLOSSY_R
 
 
 def _p_disk(x: Arr, y: Arr, e_u: Arr, e_v: Arr) -> Arr:

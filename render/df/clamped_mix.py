@@ -29,8 +29,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from render.df._mix import MixBsdf, MixEdf, bsdf_component  # noqa: F401 - used in doctests
+from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
+    COMPONENT_WIDTH,
+    MixBsdf,
+    MixEdf,
+    bsdf_component,
+    mix_signatures,
+)
 from render.df.normalized_mix import _dispatch
+from render.jit import njit
 from render.numerics import saturate
 
 __all__ = [
@@ -40,7 +47,42 @@ __all__ = [
     "ColorClampedMix",
     "ClampedMixEdf",
     "ColorClampedMixEdf",
+    "SIGNATURE",
+    "COLOR_SIGNATURE",
+    "EDF_SIGNATURE",
+    "COLOR_EDF_SIGNATURE",
+    "mix_weights",
 ]
+
+
+# --- signatures and kernels (the compiled render core) --------------------------------
+# The effective weights (the interpreter, render.program, selects, sums and samples the
+# components).  A mix node's slots: its k component weights as colours, component i's at
+# ``b + 3 i`` (render.df._mix: the component signatures); one kernel serves every
+# overload (a float weight is packed as a grey colour).
+
+#: ``df::clamped_mix`` over ``bsdf_component``, ``color_bsdf_component`` (MDL 1.4),
+#: ``edf_component``, ``color_edf_component`` (MDL 1.4)
+SIGNATURE, COLOR_SIGNATURE, EDF_SIGNATURE, COLOR_EDF_SIGNATURE = mix_signatures()
+
+
+@njit
+def _clamped(P, row, at, i):
+    """One channel (slot ``at`` of component 0): ``saturate(w_i)`` cut where the running
+    sum reaches 1 (``before = cumsum - w_i``, as numpy's)."""
+    total = 0.0
+    w = 0.0
+    for j in range(i + 1):
+        w = min(max(P[row, at + COMPONENT_WIDTH * j], 0.0), 1.0)
+        total += w
+    return max(min(w, 1.0 - (total - w)), 0.0)
+
+
+@njit
+def mix_weights(P, row, b, flags, k, i):
+    """Component ``i``'s effective weight (of ``k``) per channel: ``saturate(weight)``,
+    the first that would push the running sum above 1 cut to the remainder, later ones 0."""
+    return _clamped(P, row, b, i), _clamped(P, row, b + 1, i), _clamped(P, row, b + 2, i)
 
 
 class _Clamped:

@@ -45,7 +45,9 @@ import numpy as np
 
 from render._typing import Arr, ArrayLike, Rgb, Vec3
 from render.bsdf import lane_color, lane_float, lanes
-from render.df._layer import CurveLayer, f82_curve
+from render.df._layer import CurveLayer, curve_geometry, f82_curve, f82_curve1
+from render.df._signature import REQUIRED, Param, Signature
+from render.jit import njit
 from render.numerics import saturate
 
 __all__ = [
@@ -53,7 +55,154 @@ __all__ = [
     "custom_curve_layer",
     "ColorCustomCurveLayer",
     "color_custom_curve_layer",
+    "SIGNATURE",
+    "COLOR_SIGNATURE",
+    "layer_factors",
+    "layer_estimates",
+    "layer_possible",
+    "curve_h",
+    "curve_nk",
+    "curve_constant",
+    "curve_is_one",
 ]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+# The per-node factors of CurveLayer with the custom curve (the interpreter,
+# render.program, walks the tree, maps directions into the layer frame, looks up the
+# curve-weighted albedo Ĉ, applies the frame-agreement mask and sums).  One set of
+# kernels serves both forms: the float form's reflectivities and weight are packed as
+# grey colours, and it carries the colour form's f82_factor slot at its default 1 (not an
+# MDL parameter of custom_curve_layer: ``mdl=False``).
+
+
+def _params(r0: Param, r90: Param, f82: Param, weight: Param) -> tuple:
+    return (r0, r90, f82, Param("exponent", "float", 5.0, clamp=(0.0, None)), weight,
+            Param("layer", "bsdf", None), Param("base", "bsdf", None),
+            Param("normal", "float3", "state::normal()"))
+
+
+#: ``df::custom_curve_layer``
+SIGNATURE = Signature("bsdf", _params(
+    Param("normal_reflectivity", "float", REQUIRED, clamp=(0.0, 1.0), packed="color"),
+    Param("grazing_reflectivity", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
+    Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0), mdl=False),
+    Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
+))
+#: ``df::color_custom_curve_layer`` (MDL 1.4; ``f82_factor`` 1.10)
+COLOR_SIGNATURE = Signature("bsdf", _params(
+    Param("normal_reflectivity", "color", REQUIRED, clamp=(0.0, 1.0)),
+    Param("grazing_reflectivity", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+))
+_R0 = COLOR_SIGNATURE.offset("normal_reflectivity")
+_R90 = COLOR_SIGNATURE.offset("grazing_reflectivity")
+_F82 = COLOR_SIGNATURE.offset("f82_factor")
+_EXPONENT = COLOR_SIGNATURE.offset("exponent")
+_WEIGHT = COLOR_SIGNATURE.offset("weight")
+
+
+@njit
+def _curve3(P, row, b, c):
+    """``C(c)`` per channel (the F82-tinted custom curve)."""
+    p = P[row, b + _EXPONENT]
+    return (f82_curve1(c, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
+            f82_curve1(c, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
+            f82_curve1(c, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
+
+
+@njit
+def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """:meth:`CurveLayer._curves`: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
+    transmitted ``wi`` mirrored, no refraction half vector)."""
+    kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
+    h0, h1, h2 = _curve3(P, row, b, kh)
+    a0, a1, a2 = _curve3(P, row, b, nk1)
+    r0, r1, r2 = _curve3(P, row, b, nk2)
+    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+
+
+@njit
+def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
+    """:meth:`CurveLayer._factors`: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
+    max(C(nk1), C(nk2), Ĉ(wo), Ĉ(wi)))`` per channel.
+
+    ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
+    curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
+    disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
+    ``wo`` or ``wi`` lies on different sides of the two tangent planes
+    (``LayerFrame.agree``, the interpreter's mask).
+    """
+    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
+                                     wilx, wily, wilz)
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    m0 = max(m0, max(co0, ci0))
+    m1 = max(m1, max(co1, ci1))
+    m2 = max(m2, max(co2, ci2))
+    return (w0 * h0, w1 * h1, w2 * h2,
+            max(1.0 - w0 * m0, 0.0), max(1.0 - w1 * m1, 0.0), max(1.0 - w2 * m2, 0.0))
+
+
+@njit
+def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
+    """:meth:`CurveLayer._estimates`: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
+    s = -1.0 if wolz < 0.0 else 1.0
+    c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return (w0 * c0, w1 * c1, w2 * c2, max(1.0 - w0 * max(c0, co0), 0.0),
+            max(1.0 - w1 * max(c1, co1), 0.0), max(1.0 - w2 * max(c2, co2), 0.0))
+
+
+@njit
+def layer_possible(P, row, b, flags):
+    """``(layer, base)`` can contribute: some channel of ``w max(R0, R90)`` positive; not
+    ``w == 1`` with ``C == 1`` in every channel.  The interpreter ANDs in whether each
+    child exists and the frames agree."""
+    pos_l = False
+    white = True
+    for k in range(3):
+        w = P[row, b + _WEIGHT + k]
+        pos_l = pos_l or w * max(P[row, b + _R0 + k], P[row, b + _R90 + k]) > 0.0
+        white = white and w == 1.0
+    return pos_l, not (white and curve_is_one(P, row, b, flags))
+
+
+@njit
+def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
+    """``C(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
+    and ``wi_L``): what ``CurveAlbedo._deviation`` integrates."""
+    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
+    return h0, h1, h2
+
+
+@njit
+def curve_nk(P, row, b, flags, vx, vy, vz):
+    """``C(|v.z|)`` (the control variate's curve)."""
+    return _curve3(P, row, b, abs(vz))
+
+
+@njit
+def curve_constant(P, row, b, flags):
+    """``C`` takes one value at every cosine: no F82 tint and ``R0 == R90`` or ``p == 0``
+    (every channel)."""
+    p0 = max(P[row, b + _EXPONENT], 0.0) == 0.0  # as f82_curve1 reads p
+    for k in range(3):
+        if not (P[row, b + _F82 + k] == 1.0
+                and (P[row, b + _R0 + k] == P[row, b + _R90 + k] or p0)):
+            return False
+    return True
+
+
+@njit
+def curve_is_one(P, row, b, flags):
+    """``C == 1`` at every cosine: ``R0 == R90 == 1`` and no F82 tint (every channel)."""
+    for k in range(3):
+        if not (P[row, b + _R0 + k] == 1.0 and P[row, b + _R90 + k] == 1.0
+                and P[row, b + _F82 + k] == 1.0):
+            return False
+    return True
 
 
 class CustomCurveLayer(CurveLayer):

@@ -29,6 +29,8 @@ Portsmouth et al., "EON: a practical energy-preserving rough diffuse BRDF" (2025
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
@@ -42,8 +44,11 @@ from render.bsdf import (
     lane_float,
     lanes,
 )
+from render.df import _kernel_common as kc
 from render.df._common import INV_PI, orient
+from render.df._signature import Param, Signature
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import TOL, check_finite, dot, safe_sqrt, saturate
 from render.warp import square_to_cosine_hemisphere
 
@@ -53,6 +58,114 @@ __all__ = ["DiffuseReflectionBsdf", "diffuse_reflection_bsdf", "oren_nayar_albed
 _C_A = 0.5 - 2.0 / (3.0 * np.pi)
 #: ``rho_avg = A + C_AVG B``
 _C_AVG = 2.0 / 3.0 - 28.0 / (15.0 * np.pi)
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("bsdf", (
+    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("roughness", "float", 0.0, clamp=(0.0, 1.0)),
+    Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
+    Param("handle", "string", "", uniform=True),
+))
+_TINT = SIGNATURE.offset("tint")
+_ROUGHNESS = SIGNATURE.offset("roughness")
+_MS_TINT = SIGNATURE.offset("multiscatter_tint")
+_PI = float(np.pi)
+_K_C_A = float(_C_A)
+_K_C_AVG = float(_C_AVG)
+
+
+@njit
+def _g_kernel(mu):
+    """:func:`_g` of one ``mu`` (clamped to [0, 1])."""
+    if mu < 0.0:
+        mu = 0.0
+    elif mu > 1.0:
+        mu = 1.0
+    s = math.sqrt(max(1.0 - mu * mu, 0.0))
+    theta = math.atan2(s, mu)
+    return s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
+
+
+@njit
+def _value(P, row, b, wox, woy, woz, wix, wiy, wiz):
+    """``DiffuseReflectionBsdf._value`` for an oriented ``wo`` -> ``(v0, v1, v2, valid)``:
+    the sample weight ``eval / pdf``."""
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    sigma = P[row, b + _ROUGHNESS]
+    m0, m1, m2 = P[row, b + _MS_TINT], P[row, b + _MS_TINT + 1], P[row, b + _MS_TINT + 2]
+    black = t0 == 0.0 and t1 == 0.0 and t2 == 0.0 and m0 == 0.0 and m1 == 0.0 and m2 == 0.0
+    mu1 = woz
+    mu2 = wiz
+    if not (mu1 > kc.COS_ZERO and mu2 > kc.COS_ZERO) or black:
+        return 0.0, 0.0, 0.0, False
+    if not sigma > 0.0:
+        return t0, t1, t2, True  # Lambert
+    # Fujii's Oren–Nayar: s / t with t = max(mu1, mu2) where s > 0
+    a = 1.0 / (1.0 + _K_C_A * sigma)
+    bb = sigma * a
+    s = max(kc.dot3(wox, woy, woz, wix, wiy, wiz) - mu1 * mu2, -1.0)
+    tmax = max(max(mu1, mu2), kc.COS_ZERO)
+    if s > 0.0:
+        s = s / tmax
+    single = a + bb * s
+    v0 = single * t0
+    v1 = single * t1
+    v2 = single * t2
+    if m0 > 0.0 or m1 > 0.0 or m2 > 0.0:
+        # energy compensation: 1 - rho(mu) = B (C_A - G(mu)/pi)
+        e1 = _K_C_A - _g_kernel(mu1) / _PI
+        e2 = _K_C_A - _g_kernel(mu2) / _PI
+        multi = bb * max(e1, 0.0) * max(e2, 0.0) / (_K_C_A - _K_C_AVG)
+        v0 = v0 + multi * m0
+        v1 = v1 + multi * m1
+        v2 = v2 + multi * m2
+    return v0, v1, v2, True
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """``eval`` (with ``|cos theta_i|``) and ``pdf`` of one lane -> ``(f0, f1, f2, pdf)``."""
+    flip, woz = kc.orient(woz)
+    wiz = kc.mirror_z(wiz, flip)
+    v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
+    if not valid:
+        return 0.0, 0.0, 0.0, 0.0
+    pdf = wiz * INV_PI
+    return v0 * pdf, v1 * pdf, v2 * pdf, pdf
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """Cosine-weighted sample of one lane -> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)``."""
+    flip, woz = kc.orient(woz)
+    wix, wiy, wiz = kc.cosine_hemisphere(kc.clamp_u(u2x), kc.clamp_u(u2y))
+    v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
+    if not valid:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    return (wix, wiy, kc.mirror_z(wiz, flip), wiz * INV_PI, v0, v1, v2,
+            kc.LOBE_DIFFUSE_REFLECTION)
+
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz):
+    """Directional albedo of one lane (closed form) -> ``(a0, a1, a2)``."""
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    sigma = P[row, b + _ROUGHNESS]
+    m0, m1, m2 = P[row, b + _MS_TINT], P[row, b + _MS_TINT + 1], P[row, b + _MS_TINT + 2]
+    black = t0 == 0.0 and t1 == 0.0 and t2 == 0.0 and m0 == 0.0 and m1 == 0.0 and m2 == 0.0
+    mu = abs(woz)
+    if not mu > kc.COS_ZERO or black:
+        return 0.0, 0.0, 0.0
+    a = 1.0 / (1.0 + _K_C_A * sigma)
+    g = _g_kernel(mu)
+    rho = a + sigma * a * g / _PI
+    omr = sigma * a * max(_K_C_A - g / _PI, 0.0)
+    return rho * t0 + omr * m0, rho * t1 + omr * m1, rho * t2 + omr * m2
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
 
 
 def _g(mu: Arr) -> Arr:

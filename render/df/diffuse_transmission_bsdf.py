@@ -16,12 +16,61 @@ import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
 from render.bsdf import Bsdf, BsdfSample, Lobe, check_dirs, check_samples, lane_color, lanes
+from render.df import _kernel_common as kc
 from render.df._common import INV_PI, orient
+from render.df._signature import Param, Signature
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import TOL, saturate
 from render.warp import square_to_cosine_hemisphere
 
 __all__ = ["DiffuseTransmissionBsdf", "diffuse_transmission_bsdf"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("bsdf", (
+    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("handle", "string", "", uniform=True),
+))
+_TINT = SIGNATURE.offset("tint")
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """``eval`` (with ``|cos theta_i|``) and ``pdf`` of one lane -> ``(f0, f1, f2, pdf)``:
+    the Lambert lobe on the side opposite ``wo``."""
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    flip, woz = kc.orient(woz)
+    wiz = kc.mirror_z(wiz, flip)
+    if not (woz > kc.COS_ZERO and wiz < -kc.COS_ZERO) or (t0 == 0.0 and t1 == 0.0 and t2 == 0.0):
+        return 0.0, 0.0, 0.0, 0.0
+    pdf = -wiz * INV_PI
+    return t0 * pdf, t1 * pdf, t2 * pdf, pdf
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """Cosine-weighted sample of the far side -> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)``."""
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    flip, woz = kc.orient(woz)
+    wix, wiy, wiz = kc.cosine_hemisphere(kc.clamp_u(u2x), kc.clamp_u(u2y))
+    wiz = -wiz
+    if not (woz > kc.COS_ZERO and wiz < -kc.COS_ZERO) or (t0 == 0.0 and t1 == 0.0 and t2 == 0.0):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    return (wix, wiy, kc.mirror_z(wiz, flip), -wiz * INV_PI, t0, t1, t2,
+            kc.LOBE_DIFFUSE_TRANSMISSION)
+
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz):
+    """Directional albedo of one lane: ``tint`` -> ``(a0, a1, a2)``."""
+    if not abs(woz) > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0
+    return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
 
 
 class DiffuseTransmissionBsdf(Bsdf):

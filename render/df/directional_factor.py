@@ -28,12 +28,52 @@ import numpy as np
 from render._typing import ArrayLike, Rgb, Vec3
 from render.bsdf import Lobe, check_dirs, lane_color, lane_float, lanes
 from render.df._combine import albedo_correction, cheap_albedo, check_child, is_mirror
-from render.df._layer import f82_curve
+from render.df._layer import f82_curve, f82_curve1, unitize3
 from render.df._scaled import ScaledBsdf
+from render.df._signature import Param, Signature
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import saturate, unitize
 
-__all__ = ["DirectionalFactor", "directional_factor"]
+__all__ = ["DirectionalFactor", "directional_factor", "SIGNATURE", "scale"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+# The factor of ScaledBsdf (the interpreter, render.program, evaluates the base and
+# scales its value and sample weight; the pdf is the base's where the product is > 0).
+
+#: ``df::directional_factor`` (the bsdf overload; ``base`` None: MDL's ``bsdf()``)
+SIGNATURE = Signature("bsdf", (
+    Param("normal_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("grazing_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("exponent", "float", 5.0, clamp=(0.0, None)),
+    Param("base", "bsdf", None),
+))
+_R0 = SIGNATURE.offset("normal_tint")
+_R90 = SIGNATURE.offset("grazing_tint")
+_F82 = SIGNATURE.offset("f82_factor")
+_EXPONENT = SIGNATURE.offset("exponent")
+
+
+@njit
+def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """:meth:`DirectionalFactor._scale`: ``C(wo.h)`` per channel, ``h`` the reflection half
+    vector (both directions mirrored to ``wo``'s side, then a transmitted ``wi`` through
+    the tangent plane); 0 where ``wo.h < 0``."""
+    s = -1.0 if woz < 0.0 else 1.0
+    oz = woz * s
+    iz = wiz * s
+    hx, hy, hz, ok = unitize3(wox + wix, woy + wiy, oz + (-iz if iz < 0.0 else iz))
+    if not ok:
+        hx, hy, hz = 0.0, 0.0, 1.0
+    kh = wox * hx + oz * hz + woy * hy
+    if not kh >= 0.0:
+        return 0.0, 0.0, 0.0
+    p = P[row, b + _EXPONENT]
+    return (f82_curve1(kh, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
+            f82_curve1(kh, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
+            f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
 
 
 class DirectionalFactor(ScaledBsdf):

@@ -41,9 +41,133 @@ import numpy as np
 
 from render._typing import Arr, ArrayLike, Rgb, Vec3
 from render.bsdf import lane_color, lanes
-from render.df._layer import CurveLayer, FresnelCurve
+from render.df._layer import CurveLayer, FresnelCurve, curve_geometry, fresnel_curve, fresnel_eta
+from render.df._signature import REQUIRED, Param, Signature
+from render.jit import njit
 
-__all__ = ["FresnelLayer", "fresnel_layer", "ColorFresnelLayer", "color_fresnel_layer"]
+__all__ = ["FresnelLayer", "fresnel_layer", "ColorFresnelLayer", "color_fresnel_layer",
+           "SIGNATURE", "COLOR_SIGNATURE", "layer_factors", "layer_estimates",
+           "layer_possible", "curve_h", "curve_nk", "curve_constant", "curve_is_one"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+# The per-node factors of CurveLayer with the Fresnel curve (the interpreter,
+# render.program, walks the tree, maps directions into the layer frame, looks up the
+# curve-weighted albedo Ĉ, applies the frame-agreement mask and sums).  One set of
+# kernels serves both forms: the float ior and weight are packed as grey colours.
+# ``ior`` must be > 0 (the numpy class raises; the packer should too): the kernels
+# treat an ior <= 0 as an infinitely dense coat (F = 1), never NaN.
+
+
+def _params(ior: Param, weight: Param) -> tuple:
+    return (ior, weight, Param("layer", "bsdf", None), Param("base", "bsdf", None),
+            Param("normal", "float3", "state::normal()"))
+
+
+#: ``df::fresnel_layer`` plus the renderer's IORs on the ``+z`` and ``-z`` sides
+SIGNATURE = Signature("bsdf", _params(
+    Param("ior", "float", REQUIRED, packed="color"),
+    Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
+), context=("ior_outside", "ior_inside"))
+#: ``df::color_fresnel_layer`` (MDL 1.4)
+COLOR_SIGNATURE = Signature("bsdf", _params(
+    Param("ior", "color", REQUIRED),
+    Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+), context=("ior_outside", "ior_inside"))
+_IOR = COLOR_SIGNATURE.offset("ior")
+_WEIGHT = COLOR_SIGNATURE.offset("weight")
+_IOR_OUTSIDE = COLOR_SIGNATURE.offset("ior_outside")
+_IOR_INSIDE = COLOR_SIGNATURE.offset("ior_inside")
+
+
+@njit
+def _curve3(P, row, b, flags, woz, c):
+    """``F(c)`` per channel, with the IOR context of ``wo``'s side (``woz``)."""
+    ior_o = P[row, b + _IOR_OUTSIDE]
+    f0 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR], ior_o, woz, flags))
+    f1 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR + 1], ior_o, woz, flags))
+    f2 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR + 2], ior_o, woz, flags))
+    return f0, f1, f2
+
+
+@njit
+def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """:meth:`CurveLayer._curves`: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2r))`` (6 floats)."""
+    kh, nk1, nk2r = curve_geometry(True, flags, P[row, b + _IOR_OUTSIDE],
+                                   P[row, b + _IOR_INSIDE], woz, wiz, ox, oy, oz, ix, iy, iz)
+    h0, h1, h2 = _curve3(P, row, b, flags, woz, kh)
+    a0, a1, a2 = _curve3(P, row, b, flags, woz, nk1)
+    r0, r1, r2 = _curve3(P, row, b, flags, woz, nk2r)
+    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+
+
+@njit
+def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
+    """:meth:`CurveLayer._factors`: ``f_layer = w F(|wo.h|)``, ``f_base = max(0, 1 - w
+    max(F(nk1), F(nk2r), Ĉ(wo), Ĉ(wi)))`` per channel.
+
+    ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
+    curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
+    disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
+    ``wo`` or ``wi`` lies on different sides of the two tangent planes
+    (``LayerFrame.agree``, the interpreter's mask).
+    """
+    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
+                                     wilx, wily, wilz)
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    m0 = max(m0, max(co0, ci0))
+    m1 = max(m1, max(co1, ci1))
+    m2 = max(m2, max(co2, ci2))
+    return (w0 * h0, w1 * h1, w2 * h2,
+            max(1.0 - w0 * m0, 0.0), max(1.0 - w1 * m1, 0.0), max(1.0 - w2 * m2, 0.0))
+
+
+@njit
+def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
+    """:meth:`CurveLayer._estimates`: ``w F(nk1)`` and ``max(0, 1 - w max(F(nk1), Ĉ(wo)))``."""
+    s = -1.0 if wolz < 0.0 else 1.0
+    nk1 = min(max(wolz * s, 0.0), 1.0)
+    c0, c1, c2 = _curve3(P, row, b, flags, woz, nk1)
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return (w0 * c0, w1 * c1, w2 * c2, max(1.0 - w0 * max(c0, co0), 0.0),
+            max(1.0 - w1 * max(c1, co1), 0.0), max(1.0 - w2 * max(c2, co2), 0.0))
+
+
+@njit
+def layer_possible(P, row, b, flags):
+    """``(layer, base)`` can contribute: some channel of ``w`` positive (``F <= 1``); the
+    base always (``F`` is never 1 at every cosine).  The interpreter ANDs in whether each
+    child exists and the frames agree."""
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return (w0 > 0.0 or w1 > 0.0 or w2 > 0.0), True
+
+
+@njit
+def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
+    """``F(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
+    and ``wi_L``): what ``CurveAlbedo._deviation`` integrates, the context of ``v``'s side."""
+    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
+    return h0, h1, h2
+
+
+@njit
+def curve_nk(P, row, b, flags, vx, vy, vz):
+    """``F(|v.z|)`` (the control variate's curve), the context of ``v``'s side."""
+    return _curve3(P, row, b, flags, vz, abs(vz))
+
+
+@njit
+def curve_constant(P, row, b, flags):
+    """``F`` is constant (0 at every cosine): ``ior == ior_outside`` in every channel."""
+    o = P[row, b + _IOR_OUTSIDE]
+    return P[row, b + _IOR] == o and P[row, b + _IOR + 1] == o and P[row, b + _IOR + 2] == o
+
+
+@njit
+def curve_is_one(P, row, b, flags):
+    """``F == 1`` at every cosine: never."""
+    return False
 
 
 class FresnelLayer(CurveLayer):

@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from render.df._mix import (
+    COMPONENT_WIDTH,
     BsdfComponent,
     MixBsdf,
     MixEdf,
@@ -36,7 +37,9 @@ from render.df._mix import (
     color_bsdf_component,
     color_edf_component,
     edf_component,
+    mix_signatures,
 )
+from render.jit import njit
 
 __all__ = [
     "normalized_mix",
@@ -49,7 +52,39 @@ __all__ = [
     "color_bsdf_component",
     "edf_component",
     "color_edf_component",
+    "SIGNATURE",
+    "COLOR_SIGNATURE",
+    "EDF_SIGNATURE",
+    "COLOR_EDF_SIGNATURE",
+    "mix_weights",
 ]
+
+
+# --- signatures and kernels (the compiled render core) --------------------------------
+# The effective weights (the interpreter, render.program, selects, sums and samples the
+# components).  A mix node's slots: its k component weights as colours, component i's at
+# ``b + 3 i`` (render.df._mix: the component signatures); one kernel serves every
+# overload (a float weight is packed as a grey colour).
+
+#: ``df::normalized_mix`` over ``bsdf_component``, ``color_bsdf_component`` (MDL 1.4),
+#: ``edf_component``, ``color_edf_component`` (MDL 1.4)
+SIGNATURE, COLOR_SIGNATURE, EDF_SIGNATURE, COLOR_EDF_SIGNATURE = mix_signatures()
+
+
+@njit
+def mix_weights(P, row, b, flags, k, i):
+    """Component ``i``'s effective weight (of ``k``) per channel: ``max(weight, 0)``,
+    divided by the channel's sum over the components where that sum exceeds 1."""
+    s0 = s1 = s2 = 0.0
+    for j in range(k):
+        at = b + COMPONENT_WIDTH * j
+        s0 += max(P[row, at], 0.0)
+        s1 += max(P[row, at + 1], 0.0)
+        s2 += max(P[row, at + 2], 0.0)
+    at = b + COMPONENT_WIDTH * i
+    w0, w1, w2 = max(P[row, at], 0.0), max(P[row, at + 1], 0.0), max(P[row, at + 2], 0.0)
+    return (w0 / s0 if s0 > 1.0 else w0, w1 / s1 if s1 > 1.0 else w1,
+            w2 / s2 if s2 > 1.0 else w2)
 
 
 class _Normalized:

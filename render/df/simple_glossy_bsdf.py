@@ -39,12 +39,175 @@ normals" (2014).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2
-from render.df._microfacet import MicrofacetBsdf
+from render.bsdf import Lobe
+from render.df import _kernel_common as kc
+from render.df._microfacet import MicrofacetBsdf, mf_finish, mf_geometry, mf_sample_dir
+from render.df._signature import MODE_MASK, REFLECT, REQUIRED, THIN_WALLED, Param, Signature
+from render.jit import njit
 
-__all__ = ["SimpleGlossyBsdf", "simple_glossy_bsdf", "AshikhminShirley"]
+__all__ = [
+    "SimpleGlossyBsdf",
+    "simple_glossy_bsdf",
+    "AshikhminShirley",
+    "SIGNATURE",
+    "eval_pdf",
+    "sample",
+]
+
+# --- signature and kernels (the compiled render core) ---------------------------------------
+SIGNATURE = Signature("bsdf", (
+    Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
+    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    # not implemented (as the numpy class): the packer refuses non-zero values
+    Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
+    Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
+    Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
+    Param("handle", "string", "", uniform=True),
+), context=("ior_outside", "ior_inside"))
+_RU = SIGNATURE.offset("roughness_u")
+_RV = SIGNATURE.offset("roughness_v")
+_TINT = SIGNATURE.offset("tint")
+_TANGENT = SIGNATURE.offset("tangent_u")
+_IOR_OUT = SIGNATURE.offset("ior_outside")
+_IOR_IN = SIGNATURE.offset("ior_inside")
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_HALF_PI = 0.5 * math.pi
+_GLOSSY_R = int(Lobe.GLOSSY_REFLECTION)
+_GLOSSY_T = int(Lobe.GLOSSY_TRANSMISSION)
+_MODE_MASK_, _REFLECT_, _THIN_ = MODE_MASK, REFLECT, THIN_WALLED
+
+
+@njit
+def as_exponents(ru, rv):
+    """``AshikhminShirley.__init__``: ``(e_u, e_v, norm)`` (roughness clamped at 1e-7)."""
+    ru = max(ru, kc.ROUGHNESS_MIN)
+    rv = max(rv, kc.ROUGHNESS_MIN)
+    e_u = 2.0 / (ru * ru)
+    e_v = 2.0 / (rv * rv)
+    return e_u, e_v, math.sqrt((e_u + 1.0) * (e_v + 1.0)) / _TWO_PI
+
+
+@njit
+def as_d_cos(e_u, e_v, norm, ht, hb, hn):
+    """``AshikhminShirley.d_cos``: ``D(h) (n.h)`` in the anisotropy frame."""
+    s2 = ht * ht + hb * hb
+    if not (hn > 0.0 and s2 < 1.0):
+        return 0.0
+    # (n.h)^(x) = exp(x/2 * log(1 - s2)); x s2 = e_u ht^2 + e_v hb^2 stays finite as s2 -> 0
+    ratio = math.log1p(-s2) / s2 if s2 > 0.0 else -1.0
+    expo = 0.5 * (e_u * ht * ht + e_v * hb * hb) * ratio
+    return norm * math.exp(expo)
+
+
+@njit
+def as_azimuth(e_u, e_v, u):
+    """The anisotropic Phong azimuth: quadrant from ``u``, then
+    ``tan(phi) = sqrt((e_u+1)/(e_v+1)) tan(pi u'/2)`` -> ``(cos phi, sin phi)``."""
+    q = math.floor(4.0 * u)
+    half = _HALF_PI * (4.0 * u - q)
+    phi0 = math.atan2(math.sqrt(e_u + 1.0) * math.sin(half), math.sqrt(e_v + 1.0) * math.cos(half))
+    if q == 0.0:
+        phi = phi0
+    elif q == 1.0:
+        phi = _PI - phi0
+    elif q == 2.0:
+        phi = _PI + phi0
+    else:
+        phi = _TWO_PI - phi0
+    return math.cos(phi), math.sin(phi)
+
+
+@njit
+def as_sample(e_u, e_v, u0, u1):
+    """``AshikhminShirley.sample``: a half vector ``(ht, hb, hn)`` with density ``D (n.h)``."""
+    cp, sp = as_azimuth(e_u, e_v, u0)
+    e = e_u * cp * cp + e_v * sp * sp
+    # cos theta = (1 - u1)^(1/(e+1)); keep 1 - cos accurate for huge exponents
+    one_minus_cos = -math.expm1(math.log1p(-u1) / (e + 1.0))
+    cos_t = 1.0 - one_minus_cos
+    sin_t = math.sqrt(max(one_minus_cos * (2.0 - one_minus_cos), 0.0))
+    return sin_t * cp, sin_t * sp, cos_t
+
+
+@njit
+def _setup(P, row, b, flags, flip):
+    """``MicrofacetBsdf._setup`` for one lane -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2)``."""
+    e_u, e_v, norm = as_exponents(P[row, b + _RU], P[row, b + _RV])
+    tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
+                                P[row, b + _TANGENT + 2])
+    if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
+        ok = False
+    o = P[row, b + _IOR_OUT]
+    i = P[row, b + _IOR_IN]
+    if not (o > 0.0 and i > 0.0):
+        ok = False  # not an IOR (the packer and the numpy class refuse it)
+    eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_) != 0, True)
+    return ok, e_u, e_v, norm, tx, ty, eta1, eta2
+
+
+@njit
+def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, ty, eta1, eta2):
+    """``MicrofacetBsdf._kernel`` for an oriented lane -> ``(w0, w1, w2, pdf)``."""
+    ok, refr, hx, hy, hz, kh1, kh2, p_ev, g1_1, g2 = mf_geometry(
+        flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0
+    # distribution in the anisotropy frame (t = (tx, ty, 0), b = (ty, -tx, 0))
+    ht = hx * tx + hy * ty
+    hb = hx * ty - hy * tx
+    D = as_d_cos(e_u, e_v, norm, ht, hb, hz) / hz
+    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, g2,
+                     P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2])
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
+    flip = woz < 0.0
+    if flip:  # orient: mirror both through the tangent plane
+        woz = -woz
+        wiz = -wiz
+    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0
+    w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                             e_u, e_v, norm, tx, ty, eta1, eta2)
+    return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
+    u1 = kc.clamp_u(u1)
+    u2x = kc.clamp_u(u2x)
+    u2y = kc.clamp_u(u2y)
+    flip = woz < 0.0
+    if flip:
+        woz = -woz
+    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    # half vector from D (n.h), in the anisotropy frame, then into the local frame
+    ht, hb, hn = as_sample(e_u, e_v, u2x, u2y)
+    ok, wix, wiy, wiz = mf_sample_dir(flags, eta1, eta2, wox, woy, woz,
+                                      ht * tx + hb * ty, ht * ty - hb * tx, hn, u1)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                             e_u, e_v, norm, tx, ty, eta1, eta2)
+    if not pdf > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    lobe = _GLOSSY_T if wiz < 0.0 else _GLOSSY_R
+    if flip:
+        wiz = -wiz
+    return wix, wiy, wiz, pdf, w0, w1, w2, lobe
 
 
 class AshikhminShirley:

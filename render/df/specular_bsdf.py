@@ -34,13 +34,92 @@ import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
 from render.bsdf import Bsdf, BsdfSample, Lobe, check_dirs, check_samples, lane_color, lanes
+from render.df import _kernel_common as kc
 from render.df._common import ScatterMode, ior_pair, lane_ior, orient
+from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED, TRANSMIT, Param, Signature
 from render.frame import mirror_z
+from render.jit import njit
 from render.numerics import TOL, fresnel_dielectric, refract, saturate
 
 __all__ = ["SpecularBsdf", "specular_bsdf"]
 
 _Z = np.array([0.0, 0.0, 1.0])
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("bsdf", (
+    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
+    Param("handle", "string", "", uniform=True),
+), context=("ior_outside", "ior_inside"))
+_TINT = SIGNATURE.offset("tint")
+_IOR_OUTSIDE = SIGNATURE.offset("ior_outside")
+_IOR_INSIDE = SIGNATURE.offset("ior_inside")
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """A delta lobe: ``(0, 0, 0, 0)`` (reached only by :func:`sample`)."""
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """The mirror or refracted direction of one lane -> ``(wix, wiy, wiz, pdf, w0, w1, w2,
+    lobe)``; ``pdf`` is the event's probability (Fresnel's ``F`` or ``1 - F`` in
+    ``scatter_reflect_transmit``, else 1), the weight ``tint``.
+
+    ``flags & MODE_MASK`` is the scatter mode, ``flags & THIN_WALLED`` passes
+    transmission straight through (``wi = -wo``).  IORs not both positive (the packer
+    rejects them) scatter nothing.
+    """
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    ior_o, ior_i = P[row, b + _IOR_OUTSIDE], P[row, b + _IOR_INSIDE]
+    mode = flags & MODE_MASK
+    thin = (flags & THIN_WALLED) != 0
+    flip, c = kc.orient(woz)
+    if not c > kc.COS_ZERO or (t0 == 0.0 and t1 == 0.0 and t2 == 0.0):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    if not (ior_o > 0.0 and ior_i > 0.0):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    eta1, eta2 = kc.ior_pair(ior_o, ior_i, flip, thin, False)
+    # the probability of reflection per mode
+    if mode == REFLECT:
+        p_refl = 1.0
+    elif mode == TRANSMIT:
+        bb = eta1 / eta2
+        p_refl = 1.0 if bb * bb * (1.0 - c * c) > 1.0 and not thin else 0.0  # only TIR
+    else:
+        p_refl, _ = kc.fresnel_dielectric(c, eta2 / eta1)
+    refl = kc.clamp_u(u1) < p_refl
+    if refl:
+        prob = p_refl
+        wix, wiy, wiz = -wox, -woy, c
+        ok = wiz > kc.COS_ZERO
+        lobe = kc.LOBE_SPECULAR_REFLECTION
+    else:
+        prob = 1.0 - p_refl
+        if thin:
+            wix, wiy, wiz = -wox, -woy, -c
+        else:
+            wix, wiy, wiz, _ = kc.refract(wox, woy, c, 0.0, 0.0, 1.0, eta1 / eta2)
+        ok = wiz < -kc.COS_ZERO
+        lobe = kc.LOBE_SPECULAR_TRANSMISSION
+    if not (ok and prob > 0.0):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    return wix, wiy, kc.mirror_z(wiz, flip), prob, t0, t1, t2, lobe
+
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz):
+    """Directional albedo of one lane: ``tint`` in every mode -> ``(a0, a1, a2)``."""
+    if not abs(woz) > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0
+    return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
+
 
 
 class SpecularBsdf(Bsdf):

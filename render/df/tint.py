@@ -26,9 +26,29 @@ from render._typing import ArrayLike, Rgb, Vec3
 from render.bsdf import Lobe, check_dirs, lane_color, lanes
 from render.df._combine import cheap_albedo, check_child
 from render.df._scaled import ScaledBsdf
+from render.df._signature import REQUIRED, Param, Signature
+from render.jit import njit
 from render.numerics import saturate
 
-__all__ = ["Tint", "tint"]
+__all__ = ["Tint", "tint", "SIGNATURE", "scale"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+# The factor of ScaledBsdf (the interpreter, render.program, evaluates the base and
+# scales its value and sample weight; the pdf is the base's where the product is > 0).
+
+#: ``df::tint`` (the bsdf overload; ``base`` None: MDL's ``bsdf()``)
+SIGNATURE = Signature("bsdf", (
+    Param("tint", "color", REQUIRED, clamp=(0.0, 1.0)),
+    Param("base", "bsdf", REQUIRED),
+))
+_TINT = SIGNATURE.offset("tint")
+
+
+@njit
+def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """:meth:`Tint._scale`: the tint, at every direction pair."""
+    return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
 
 
 class Tint(ScaledBsdf):

@@ -31,9 +31,81 @@ import numpy as np
 from render._typing import ArrayLike, Vec3
 from render.bsdf import lane_color, lane_float, lanes
 from render.df._layer import LayerBsdf
+from render.df._signature import Param, Signature
+from render.jit import njit
 from render.numerics import saturate
 
-__all__ = ["WeightedLayer", "weighted_layer", "ColorWeightedLayer", "color_weighted_layer"]
+__all__ = ["WeightedLayer", "weighted_layer", "ColorWeightedLayer", "color_weighted_layer",
+           "SIGNATURE", "COLOR_SIGNATURE", "layer_factors", "layer_estimates",
+           "layer_possible", "curve_h", "curve_nk", "curve_constant", "curve_is_one"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+# The per-node factors of the layer (the interpreter, render.program, walks the tree,
+# maps directions into the layer frame, applies the frame-agreement mask and sums).
+# One set of kernels serves both forms: the float weight is packed as a grey colour.
+
+
+def _layer_params(weight: Param) -> tuple:
+    return (weight, Param("layer", "bsdf", None), Param("base", "bsdf", None),
+            Param("normal", "float3", "state::normal()"))
+
+
+#: ``df::weighted_layer`` (``layer``/``base`` None: MDL's ``bsdf()``)
+SIGNATURE = Signature("bsdf", _layer_params(
+    Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color")))
+#: ``df::color_weighted_layer`` (MDL 1.4)
+COLOR_SIGNATURE = Signature("bsdf", _layer_params(
+    Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0))))
+_WEIGHT = COLOR_SIGNATURE.offset("weight")
+
+
+@njit
+def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
+    """``(f_layer, f_base)`` per channel: ``w`` and ``1 - w`` (no directional dependence;
+    the curve-albedo arguments ``co``, ``ci`` are not used)."""
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return w0, w1, w2, 1.0 - w0, 1.0 - w1, 1.0 - w2
+
+
+@njit
+def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
+    """The factors' expected values at ``wo`` (for selection): the factors themselves."""
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return w0, w1, w2, 1.0 - w0, 1.0 - w1, 1.0 - w2
+
+
+@njit
+def layer_possible(P, row, b, flags):
+    """``(layer, base)`` can contribute: a positive weight, a weight below 1 (some channel).
+    The interpreter ANDs in whether each child exists and the frames agree."""
+    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
+    return (w0 > 0.0 or w1 > 0.0 or w2 > 0.0), (w0 < 1.0 or w1 < 1.0 or w2 < 1.0)
+
+
+@njit
+def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
+    """The curve at the half vector: ``C = 1`` (the weighted layer's curve is constant)."""
+    return 1.0, 1.0, 1.0
+
+
+@njit
+def curve_nk(P, row, b, flags, vx, vy, vz):
+    """The curve at ``|v.z|``: 1."""
+    return 1.0, 1.0, 1.0
+
+
+@njit
+def curve_constant(P, row, b, flags):
+    """``C`` takes one value at every cosine (so ``Ĉ`` is never needed): always."""
+    return True
+
+
+@njit
+def curve_is_one(P, row, b, flags):
+    """``C == 1`` at every cosine: always."""
+    return True
 
 
 class WeightedLayer(LayerBsdf):
