@@ -1,0 +1,324 @@
+"""Scalar numba helpers shared by the df kernels: orientation, Fresnel, refraction, warps.
+
+The compiled twins, one lane at a time, of :mod:`render.numerics`, :mod:`render.warp`,
+:mod:`render.frame` and :mod:`render.df._common`.  Each helper performs the same IEEE
+operations in the same order as the numpy function it names, so a kernel built from
+them agrees with its numpy class to the last bit (except where numpy's own SIMD
+``exp``/``log``/``sin``/``cos``/``arctan2`` differ from the C library's in the last bit).
+Every helper is total: any finite input gives a finite output, never NaN, never an
+exception (guards as in the numpy code).
+
+Conventions (:mod:`render.frame`): the local frame has ``+z`` along the shading normal,
+``+z`` is the outside; ``wo`` points toward the viewer, ``wi`` toward the light.  The
+tolerances are :data:`render.numerics.TOL`'s, read at import (numba freezes module
+globals; :mod:`render.jit` keys its cache to every source file, so an edit of ``TOL``
+recompiles).
+
+Examples
+--------
+>>> F, ct = fresnel_dielectric(1.0, 1.5)
+>>> round(F, 6), ct
+(0.04, -1.0)
+>>> flip, z = orient(-0.5)
+>>> flip, z, mirror_z(0.8, flip)
+(True, 0.5, -0.8)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from render.bsdf import Lobe
+from render.jit import njit
+from render.numerics import ONE_MINUS_EPS as _ONE_MINUS_EPS
+from render.numerics import TOL
+
+__all__ = [
+    "COS_ZERO",
+    "ROUGHNESS_MIN",
+    "IOR_DELTA_MIN",
+    "SPREAD_MIN",
+    "UNIT_MIN",
+    "ONE_MINUS_EPS",
+    "PI",
+    "INV_PI",
+    "LOBE_DIFFUSE_REFLECTION",
+    "LOBE_DIFFUSE_TRANSMISSION",
+    "LOBE_GLOSSY_REFLECTION",
+    "LOBE_GLOSSY_TRANSMISSION",
+    "LOBE_SPECULAR_REFLECTION",
+    "LOBE_SPECULAR_TRANSMISSION",
+    "clamp_u",
+    "safe_sqrt",
+    "dot3",
+    "unitize",
+    "orient",
+    "mirror_z",
+    "reflect_z",
+    "reflect",
+    "refract",
+    "fresnel_dielectric",
+    "fresnel_dielectric3",
+    "ior_pair",
+    "cosine_hemisphere",
+    "frame_from_normal",
+    "tangent_axes",
+]
+
+# --- constants (module floats: numba freezes them into the machine code) ------------------
+COS_ZERO = float(TOL.cos_zero)
+ROUGHNESS_MIN = float(TOL.roughness_min)
+IOR_DELTA_MIN = float(TOL.ior_delta_min)
+SPREAD_MIN = float(TOL.spread_min)
+UNIT_MIN = float(TOL.unit_min)
+ONE_MINUS_EPS = float(_ONE_MINUS_EPS)
+PI = float(np.pi)
+#: ``render.df._common.INV_PI`` (``1 / np.pi``)
+INV_PI = 1.0 / PI
+_QUARTER_PI = PI / 4.0  # render.warp._QUARTER_PI
+
+#: :class:`render.bsdf.Lobe` flag values as ints (a sample kernel's ``lobe``)
+LOBE_DIFFUSE_REFLECTION = int(Lobe.DIFFUSE_REFLECTION)
+LOBE_DIFFUSE_TRANSMISSION = int(Lobe.DIFFUSE_TRANSMISSION)
+LOBE_GLOSSY_REFLECTION = int(Lobe.GLOSSY_REFLECTION)
+LOBE_GLOSSY_TRANSMISSION = int(Lobe.GLOSSY_TRANSMISSION)
+LOBE_SPECULAR_REFLECTION = int(Lobe.SPECULAR_REFLECTION)
+LOBE_SPECULAR_TRANSMISSION = int(Lobe.SPECULAR_TRANSMISSION)
+
+
+# --- scalars ----------------------------------------------------------------------------
+
+
+@njit
+def clamp_u(u):
+    """A uniform variate clamped into ``[0, ONE_MINUS_EPS]`` (``render.bsdf.check_samples``).
+
+    Sample kernels clamp their variates so that any finite input stays safe
+    (``log1p(-u)`` needs ``u < 1``).
+    """
+    if u < 0.0:
+        return 0.0
+    if u > ONE_MINUS_EPS:
+        return ONE_MINUS_EPS
+    return u
+
+
+@njit
+def safe_sqrt(x):
+    """``sqrt(max(x, 0))`` (:func:`render.numerics.safe_sqrt`)."""
+    return math.sqrt(max(x, 0.0))
+
+
+@njit
+def dot3(ax, ay, az, bx, by, bz):
+    """``a . b`` summed as ``(x + z) + y`` (:func:`render.numerics.dot`, einsum's order)."""
+    return ax * bx + az * bz + ay * by
+
+
+@njit
+def unitize(x, y, z):
+    """:func:`render.numerics.unitize` of one vector -> ``(ux, uy, uz, valid)``.
+
+    Scaled by the largest component first (no overflow or underflow of the squared
+    length); a vector whose largest component is ``<= UNIT_MIN`` gives ``(0, 0, 0, False)``.
+    """
+    scale = max(max(abs(x), abs(y)), abs(z))
+    if not scale > UNIT_MIN:
+        return 0.0, 0.0, 0.0, False
+    wx = x / scale
+    wy = y / scale
+    wz = z / scale
+    length = math.sqrt(dot3(wx, wy, wz, wx, wy, wz))
+    return wx / length, wy / length, wz / length, True
+
+
+# --- two-sidedness and mirrors ------------------------------------------------------------
+
+
+@njit
+def orient(woz):
+    """:func:`render.df._common.orient` for one lane -> ``(flip, |woz|)``.
+
+    ``flip`` is ``woz < 0``: the lane is mirrored through the tangent plane so that
+    ``wo.z >= 0``.  Mirror the other directions of the lane with :func:`mirror_z`
+    (``wi`` before evaluating, a sampled ``wi`` after sampling).
+    """
+    if woz < 0.0:
+        return True, -woz
+    return False, woz
+
+
+@njit
+def mirror_z(z, flip):
+    """``-z`` where ``flip``, else ``z`` (:func:`render.frame.mirror_z` of one component)."""
+    return -z if flip else z
+
+
+@njit
+def reflect_z(x, y, z):
+    """The mirror direction about the normal ``+z``: ``(-x, -y, z)``."""
+    return -x, -y, z
+
+
+@njit
+def reflect(kx, ky, kz, mx, my, mz):
+    """``2 (k.m) m - k`` (:func:`render.numerics.reflect`): ``k`` mirrored about unit ``m``."""
+    c2 = 2.0 * dot3(kx, ky, kz, mx, my, mz)
+    return c2 * mx - kx, c2 * my - ky, c2 * mz - kz
+
+
+@njit
+def refract(kx, ky, kz, mx, my, mz, b):
+    """:func:`render.numerics.refract` of one lane -> ``(x, y, z, tir)``.
+
+    Parameters
+    ----------
+    kx, ky, kz : float
+        Unit direction pointing away from the surface, ``k . m >= 0``.
+    mx, my, mz : float
+        Unit (micro)normal on ``k``'s side.
+    b : float
+        ``ior on k's side / ior on the far side``.
+
+    Returns
+    -------
+    x, y, z : float
+        The refracted direction (pointing away on the far side); under total internal
+        reflection the mirror direction ``2 c m - k`` instead.
+    tir : bool
+    """
+    c = dot3(kx, ky, kz, mx, my, mz)
+    s2 = b * b * max(1.0 - c * c, 0.0)
+    if s2 > 1.0:
+        c2 = 2.0 * c
+        return c2 * mx - kx, c2 * my - ky, c2 * mz - kz, True
+    ct = math.sqrt(max(1.0 - s2, 0.0))
+    d = b * c - ct
+    return -b * kx + d * mx, -b * ky + d * my, -b * kz + d * mz, False
+
+
+# --- Fresnel and the IOR pair ---------------------------------------------------------------
+
+
+@njit
+def fresnel_dielectric(cos_theta_i, eta):
+    """:func:`render.numerics.fresnel_dielectric` of one lane -> ``(F, cos_theta_t)``.
+
+    Parameters
+    ----------
+    cos_theta_i : float
+        Cosine to the normal; negative: the light arrives from the ``-z`` side.
+    eta : float
+        ``ior(-z side) / ior(+z side)``, inverted for ``cos_theta_i < 0``.
+
+    Returns
+    -------
+    F : float
+        Unpolarised reflectance in [0, 1]; exactly 0 at an index match (``eta == 1``,
+        even at grazing incidence), 1 under total internal reflection.
+    cos_theta_t : float
+        Transmitted cosine, sign opposite to ``cos_theta_i`` (0 under TIR).
+    """
+    outside = cos_theta_i >= 0.0
+    e = eta if outside else 1.0 / eta
+    c = min(abs(cos_theta_i), 1.0)
+    ct2 = 1.0 - (1.0 - c * c) / (e * e)
+    tir = ct2 <= 0.0
+    ct = math.sqrt(max(ct2, 0.0))
+    den_s = c + e * ct
+    den_p = e * c + ct
+    if den_s > 0.0 and den_p > 0.0:
+        rs = (c - e * ct) / den_s
+        rp = (e * c - ct) / den_p
+        F = 0.5 * (rs * rs + rp * rp)
+    else:
+        F = 1.0
+    if e == 1.0:
+        F = 0.0
+        ct = c
+    elif tir:
+        F = 1.0
+        ct = 0.0
+    F = min(max(F, 0.0), 1.0)
+    return F, (-ct if outside else ct)
+
+
+@njit
+def fresnel_dielectric3(cos_theta_i, eta0, eta1, eta2):
+    """:func:`fresnel_dielectric` per colour channel (a colour IOR) -> ``(F0, F1, F2)``."""
+    f0, _ = fresnel_dielectric(cos_theta_i, eta0)
+    f1, _ = fresnel_dielectric(cos_theta_i, eta1)
+    f2, _ = fresnel_dielectric(cos_theta_i, eta2)
+    return f0, f1, f2
+
+
+@njit
+def ior_pair(ior_outside, ior_inside, flip, thin_walled, glossy):
+    """:func:`render.df._common.ior_pair` of one lane -> ``(eta1, eta2)``.
+
+    ``eta1`` is the IOR on ``wo``'s side, ``eta2`` the far side's.  Lanes viewed from
+    below (``flip``) swap the pair, except on thin-walled surfaces; with ``glossy`` the
+    inside is first pushed ``IOR_DELTA_MIN`` away from the outside (an exact match makes
+    the inside the denser side).
+    """
+    i = ior_inside
+    if glossy:
+        d = ior_inside - ior_outside
+        if abs(d) < IOR_DELTA_MIN:
+            i = ior_outside + (-IOR_DELTA_MIN if d < 0.0 else IOR_DELTA_MIN)
+    if flip and not thin_walled:
+        return i, ior_outside
+    return ior_outside, i
+
+
+# --- warps and frames --------------------------------------------------------------------
+
+
+@njit
+def cosine_hemisphere(u0, u1):
+    """:func:`render.warp.square_to_cosine_hemisphere` of one lane -> ``(x, y, z)``.
+
+    Shirley–Chiu concentric disk, lifted to the ``+z`` hemisphere (density ``z / pi``).
+    """
+    a = 2.0 * u0 - 1.0
+    b = 2.0 * u1 - 1.0
+    if abs(a) > abs(b):
+        r = a
+        phi = _QUARTER_PI * (b / (a if a != 0.0 else 1.0))
+    else:
+        r = b
+        phi = 2.0 * _QUARTER_PI - _QUARTER_PI * (a / (b if b != 0.0 else 1.0))
+    x = r * math.cos(phi)
+    y = r * math.sin(phi)
+    return x, y, math.sqrt(max(1.0 - x * x - y * y, 0.0))
+
+
+@njit
+def frame_from_normal(nx, ny, nz):
+    """:meth:`render.frame.Frame.from_normal` of one unit normal -> ``(sx, sy, sz, tx, ty, tz)``.
+
+    Branch-free orthonormal basis (Duff et al. 2017); ``(s, t, n)`` is right-handed.
+    A local vector ``v`` is ``(v0 s + v1 t) + v2 n`` in the frame's space.
+    """
+    sign = 1.0 if nz >= 0.0 else -1.0
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    return (1.0 + sign * (nx * nx) * a, sign * b, -sign * nx,
+            b, sign + (ny * ny) * a, -ny)
+
+
+@njit
+def tangent_axes(tx, ty, tz):
+    """:func:`render.df._common.tangent_axes` of one ``tangent_u`` -> ``(tx, ty, valid)``.
+
+    The anisotropy axis ``t = (tx, ty, 0)`` is ``tangent_u`` projected into the tangent
+    plane and normalised (``b = (ty, -tx, 0)``); ``valid`` is False (and ``t = +x``)
+    where ``tangent_u`` is parallel to the normal (libbsdf: the lobe absorbs).
+    """
+    length = math.hypot(tx, ty)
+    full = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if length > 1e-8 * max(full, UNIT_MIN):
+        return tx / length, ty / length, True
+    return 1.0, 0.0, False
