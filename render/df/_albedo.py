@@ -15,21 +15,39 @@ modes) relative IOR ``eta = eta2 / eta1`` (rounded to 4 decimals), over:
   interpolated as ``sum_k c_k cos(2 k phi)`` through nodes at 0, 30, 60, 90 degrees.
 
 Each table column is the mean sample weight over the points of a 3-D Kronecker (R3)
-sequence pushed through the lobe's own ``sample``, built on first use and cached for
-the process, so only the roughness nodes a scene uses are ever computed (about 0.3 s
-per isotropic column and 0.4 s per anisotropic corner).  Measured accuracy against
-quadrature and Monte Carlo: ``tests/render/df``.
+sequence pushed through the lobe's compiled ``sample`` kernel (the df module's
+``sample``, bit for bit the numpy class's), built on first use and cached for the
+process, so only the roughness nodes a scene uses are ever computed.  Measured accuracy
+against quadrature and Monte Carlo: ``tests/render/df``.
+
+For the compiled render core, :func:`node_table` bakes one df node's roughness (and IOR)
+into a short table (the columns above, interpolated in roughness, for ``wo`` on either
+side) and the kernel :func:`table_albedo` interpolates it in ``mu`` (and ``phi``), as
+:func:`glossy_albedo` does; the dfs' ``albedo`` kernels read it.  Tables are not built at
+import: a full grid over roughness (and IOR) costs minutes of sampling (see the kernels'
+tests and the report in ``docs``), while a node needs at most four columns.
 """
 
 from __future__ import annotations
 
+import math
+import sys
 from functools import lru_cache
 
 import numpy as np
 
 from render._typing import Arr
+from render.jit import njit
 
-__all__ = ["glossy_albedo", "iso_column", "aniso_column", "ROUGHNESS_NODES", "MU_MIN"]
+__all__ = [
+    "glossy_albedo",
+    "iso_column",
+    "aniso_column",
+    "node_table",
+    "table_albedo",
+    "ROUGHNESS_NODES",
+    "MU_MIN",
+]
 
 #: roughness nodes of every table
 ROUGHNESS_NODES = np.concatenate([[1e-7, 1e-5, 1e-4, 3e-4], (np.arange(1, 33) / 32.0) ** 2])
@@ -58,16 +76,38 @@ def _mu_nodes(m: int) -> Arr:
     return np.maximum(np.linspace(0.0, 1.0, m) ** 2, MU_MIN)
 
 
+@njit
+def _weights(sample, P, flags, wo, pts):
+    """White sample weights (m, points) of the ``sample`` kernel for each row of ``wo``."""
+    m, k = wo.shape[0], pts.shape[0]
+    out = np.empty((m, k))
+    for i in range(m):
+        for j in range(k):
+            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
+                               pts[j, 1], pts[j, 2])[4]
+    return out
+
+
 def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
-    """Mean white sample weight for each row of ``wo`` (m, 3)."""
-    kwargs = {} if mode is None else {"mode": mode, "ior_inside": eta}
-    pts = _kronecker(points)
-    m = len(wo)
-    bsdf = cls(roughness_u=ru, roughness_v=rv, **kwargs)
-    s = bsdf.sample(
-        np.repeat(wo, points, axis=0), np.tile(pts[:, 0], m), np.tile(pts[:, 1:], (m, 1))
+    """Mean white sample weight for each row of ``wo`` (m, 3), through the df's kernels."""
+    from render.df._common import ScatterMode
+    from render.df._signature import MODE_FLAGS
+
+    module = sys.modules[cls.__module__]
+    sig = module.SIGNATURE
+    P = np.zeros((1, sig.width))
+    P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
+    P[0, sig.offset("roughness_v")] = max(rv, ROUGHNESS_NODES[0])
+    P[0, sig.offset("tint") : sig.offset("tint") + 3] = 1.0
+    P[0, sig.offset("tangent_u")] = 1.0
+    flags = 0
+    if mode is not None:
+        flags = MODE_FLAGS[ScatterMode.parse(mode).value]
+        P[0, sig.offset("ior_outside")] = 1.0
+        P[0, sig.offset("ior_inside")] = eta
+    return _weights(module.sample, P, flags, np.ascontiguousarray(wo), _kronecker(points)).mean(
+        axis=1
     )
-    return s.weight[:, 0].reshape(m, points).mean(axis=1)
 
 
 @lru_cache(maxsize=None)
@@ -177,3 +217,107 @@ def glossy_albedo(
             acc += (fu if du else 1 - fu) * (fv if dv else 1 - fv) * val
         out[an] = acc
     return out
+
+
+# --- one node's table and its compiled lookup ----------------------------------------------
+
+_MU_NODES_A = np.linspace(0.0, 1.0, N_MU_A)
+_ISO, _ANISO = 0.0, 1.0
+_HEADER = 2
+
+
+def _iso_node(cls, mode, eta: float, ru: float) -> Arr:
+    """``E`` at the ``N_MU`` nodes, interpolated in ``sqrt(r)`` (as :func:`glossy_albedo`)."""
+    i, fy = _locate(np.sqrt(np.array([ru])), _Y)
+    i, fy = int(i[0]), float(fy[0])
+    if fy >= 1.0:
+        i, fy = i + 1, 0.0
+    col = iso_column(cls, mode, eta, i)
+    if fy > 0.0:
+        col = (1.0 - fy) * col + fy * iso_column(cls, mode, eta, i + 1)
+    return col
+
+
+def _aniso_node(cls, mode, eta: float, ru: float, rv: float) -> Arr:
+    """``E`` at the ``N_PHI x N_MU_A`` nodes, bilinear in ``(sqrt(ru), sqrt(rv))``."""
+    iu, fu = (float(a[0]) for a in _locate(np.sqrt(np.array([ru])), _Y))
+    iv, fv = (float(a[0]) for a in _locate(np.sqrt(np.array([rv])), _Y))
+    acc = np.zeros((N_PHI, N_MU_A))
+    for du in (0, 1):
+        for dv in (0, 1):
+            w = (fu if du else 1 - fu) * (fv if dv else 1 - fv)
+            if w > 0.0:
+                acc += w * aniso_column(cls, mode, eta, int(iu) + du, int(iv) + dv)
+    return acc.ravel()
+
+
+def node_table(cls: type, mode, roughness_u: float, roughness_v: float,
+               eta_outside: float = 1.0, eta_inside: float = 1.0) -> np.ndarray:
+    """One df node's albedo table for :func:`table_albedo` (constant roughness and IOR).
+
+    Parameters
+    ----------
+    cls : type
+        The df class (its module holds ``SIGNATURE`` and ``sample``).
+    mode : ScatterMode or None
+        The key mode: ``scatter_reflect`` for reflection and thin-walled surfaces (the
+        Fresnel split cancels), ``None`` for lobes without modes.
+    roughness_u, roughness_v : float
+    eta_outside, eta_inside : float
+        ``eta2 / eta1`` seen from the outside (``wo.z > 0``) and from the inside
+        (refracting modes only; after ``ior_pair``'s glossy push-apart).
+
+    Returns
+    -------
+    (k,) float64
+        ``[kind, inside_offset, E outside..., (E inside...)]``: ``kind`` 0 isotropic (``E``
+        at the ``N_MU`` cosine nodes) or 1 anisotropic (``N_PHI x N_MU_A`` nodes);
+        ``inside_offset`` is where the inside table starts (0: the same table).
+    """
+    from render.df._common import ScatterMode
+
+    ru = float(np.clip(roughness_u, ROUGHNESS_NODES[0], 1.0))
+    rv = float(np.clip(roughness_v, ROUGHNESS_NODES[0], 1.0))
+    refracting = mode is not None and ScatterMode.parse(mode) is not ScatterMode.scatter_reflect
+    etas = (eta_outside, eta_inside) if refracting else (1.0,)
+
+    def one(eta):
+        eta = float(np.round(eta, 4))
+        if ru == rv:
+            return _iso_node(cls, mode, eta, ru)
+        return _aniso_node(cls, mode, eta, ru, rv)
+
+    parts = [one(e) for e in etas]
+    kind = _ISO if ru == rv else _ANISO
+    inside = _HEADER + len(parts[0]) if len(parts) > 1 else 0
+    return np.concatenate([[kind, float(inside)], *parts])
+
+
+@njit
+def table_albedo(T, t, mu, phi, inside):
+    """White albedo ``E`` from the node table at ``T[t:]`` (:func:`node_table`).
+
+    ``mu = |cos theta_o|``, ``phi`` the azimuth of ``wo`` from ``tangent_u`` folded into
+    [0, pi/2], ``inside``: ``wo`` below the surface.  Linear in ``sqrt(mu)``; anisotropic
+    tables are trigonometric in ``phi`` (``sum_k c_k cos(2 k phi)`` through the nodes).
+    """
+    base = t + _HEADER
+    if inside and T[t + 1] > 0.0:
+        base = t + int(T[t + 1])
+    y = math.sqrt(mu)
+    if T[t] == _ISO:
+        j = min(max(int(math.floor(y * (N_MU - 1))), 0), N_MU - 2)
+        fx = min(max((y - j / (N_MU - 1)) / (1.0 / (N_MU - 1)), 0.0), 1.0)
+        return (1.0 - fx) * T[base + j] + fx * T[base + j + 1]
+    j = 0
+    while j < N_MU_A - 2 and _MU_NODES_A[j + 1] <= y:
+        j += 1
+    fx = min(max((y - _MU_NODES_A[j]) / (_MU_NODES_A[j + 1] - _MU_NODES_A[j]), 0.0), 1.0)
+    E = 0.0
+    for k in range(N_PHI):
+        w = 0.0
+        for c in range(N_PHI):
+            w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
+        at = base + k * N_MU_A + j
+        E += w * ((1.0 - fx) * T[at] + fx * T[at + 1])
+    return E

@@ -99,6 +99,7 @@ import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
 from render.bsdf import Bsdf, BsdfSample, check_dirs, lane_color, lanes
+from render.df import _kernel_common as kc
 from render.df._combine import (
     Draw,
     LayerFrame,
@@ -123,7 +124,6 @@ from render.frame import mirror_z
 from render.jit import njit
 from render.numerics import (
     ONE_MINUS_EPS,
-    TOL,
     check_finite,
     fresnel_dielectric,
     saturate,
@@ -142,12 +142,10 @@ __all__ = [
     "CURVE_ALBEDO_DIRECT_POINTS",
     "CURVE_ALBEDO_SLOTS_MIN",
     "LANE_SPREAD_MAX",
-    "unitize3",
     "fresnel_curve",
     "fresnel_eta",
     "f82_curve1",
     "curve_geometry",
-    "nk_cosine",
 ]
 
 #: quadrature points (:func:`sobol_points`) of a tabulated curve-weighted albedo ``Ĉ``;
@@ -181,65 +179,42 @@ CURVE_ALBEDO_SLOTS_MIN = 256
 # --- scalar kernels shared by the layers and directional_factor (the compiled core) ---
 # The per-node factor math of weighted_layer, fresnel_layer, custom_curve_layer (and their
 # colour forms) lives in those modules; these are the pieces they share: the direction
-# geometry of CurveLayer._curves, the Fresnel and F82 curves, and unitize.  Ported
-# formula by formula (same operation order, so the numpy classes' bits where libm's pow
-# agrees with numpy's).
+# geometry of CurveLayer._curves and the Fresnel and F82 curves, ported formula by
+# formula (same operations in the same order) on render.df._kernel_common's helpers.
 
-_UNIT_MIN = TOL.unit_min
 #: 7^7 / 6^6: normalises Hoffman's F82 term to its peak at c = 1/7
 _F82_NORM = 7.0**7 / 6.0**6
 _SIX_SEVENTHS = 6.0 / 7.0
 
 
 @njit
-def unitize3(x, y, z):
-    """:func:`render.numerics.unitize` of one vector: ``(ux, uy, uz, valid)`` (0 if invalid)."""
-    scale = max(max(abs(x), abs(y)), abs(z))
-    if not scale > _UNIT_MIN:
-        return 0.0, 0.0, 0.0, False
-    wx, wy, wz = x / scale, y / scale, z / scale
-    length = math.sqrt(wx * wx + wz * wz + wy * wy)
-    return wx / length, wy / length, wz / length, True
-
-
-@njit
 def fresnel_curve(c, eta):
     """:meth:`FresnelCurve.value` of one channel: dielectric ``F(eta, saturate(c))``.
 
-    ``eta <= 0`` or infinite (an ``ior`` the packer should have rejected) gives 1, the
-    limit at both ends, never NaN.
+    An ``eta`` that is not positive and finite, or whose square underflows (an ``ior <=
+    0`` the packer should have rejected, as the numpy class does) gives 1, the limit at
+    both ends, never NaN nor numba's ZeroDivisionError.
     """
-    c = min(max(c, 0.0), 1.0)
-    if eta == 1.0:
-        return 0.0
-    if not (eta > 0.0 and eta < math.inf):
+    if not (eta > 0.0 and eta * eta > 0.0 and eta < math.inf):
         return 1.0
-    ct2 = 1.0 - (1.0 - c * c) / (eta * eta)
-    if ct2 <= 0.0:
-        return 1.0  # total internal reflection
-    ct = math.sqrt(ct2)
-    den_s = c + eta * ct
-    den_p = eta * c + ct
-    if not (den_s > 0.0 and den_p > 0.0):
-        return 1.0
-    rs = (c - eta * ct) / den_s
-    rp = (eta * c - ct) / den_p
-    return min(max(0.5 * (rs * rs + rp * rp), 0.0), 1.0)
+    return kc.fresnel_dielectric(min(max(c, 0.0), 1.0), eta)[0]
 
 
 @njit
 def fresnel_eta(ior, ior_outside, woz, flags):
-    """:meth:`FresnelCurve.eta` of one channel: ``ior / ior_outside`` from outside (``wo.z
-    >= 0`` or thin-walled), ``ior_outside / ior`` from inside (``ior_inside`` is not used:
-    the layer's ``ior`` replaces it on the far side)."""
-    if woz < 0.0 and (flags & THIN_WALLED) == 0:
-        return ior_outside / ior
-    return ior / ior_outside
+    """:meth:`FresnelCurve.eta` of one channel: ``ior / eta1`` from outside (``wo.z >= 0``
+    or thin-walled), ``eta2 / ior`` from inside, ``(eta1, eta2)`` the IOR pair of ``wo``'s
+    side (both are ``ior_outside`` there: the layer's ``ior`` replaces the far side's)."""
+    inside = woz < 0.0 and (flags & THIN_WALLED) == 0
+    den = ior if inside else ior_outside
+    if den == 0.0:
+        return math.inf  # an ior of 0 (rejected by the packer): F = 1, not an exception
+    return (ior_outside if inside else ior) / den
 
 
 @njit
 def f82_curve1(c, r0, r90, f82, p):
-    """:func:`f82_curve` of one channel (``p`` taken as ``max(p, 0)``)."""
+    """:func:`f82_curve` of one channel (``p`` read as ``max(p, 0)``)."""
     p = max(p, 0.0)
     cc = min(max(c, 0.0), 1.0)
     base = r0 + (r90 - r0) * math.pow(1.0 - cc, p)
@@ -255,7 +230,7 @@ def curve_geometry(refractive, flags, ior_outside, ior_inside, woz, wiz,
     ``woz``, ``wiz``: the inherited-frame ``wo.z``, ``wi.z`` (they tell reflection from
     transmission, and the IOR side); ``o``, ``i``: ``wo_L``, ``wi_L`` in the layer frame.
     ``refractive``: the refraction half vector for transmission (the Fresnel layers,
-    not on thin-walled surfaces).
+    not on thin-walled surfaces); otherwise ``nk2r = nk2 = |wi_L.z|``.
     """
     s = -1.0 if oz < 0.0 else 1.0  # orient the layer frame so that wo_L is on top
     oz = oz * s
@@ -263,29 +238,22 @@ def curve_geometry(refractive, flags, ior_outside, ior_inside, woz, wiz,
     nk1 = min(max(oz, 0.0), 1.0)
     nk2 = min(abs(iz), 1.0)
     tr = woz * wiz < 0.0
-    hx, hy, hz, ok = unitize3(ox + ix, oy + iy, oz + (-iz if tr else iz))
+    hx, hy, hz, ok = kc.unitize(ox + ix, oy + iy, oz + kc.mirror_z(iz, tr))
     refract = refractive and (flags & THIN_WALLED) == 0
     if refract and tr:
-        eta1, eta2 = (ior_inside, ior_outside) if woz < 0.0 else (ior_outside, ior_inside)
-        rx, ry, rz, ok = unitize3(eta1 * ox + eta2 * ix, eta1 * oy + eta2 * iy,
-                                  eta1 * oz + eta2 * iz)
-        sg = 1.0 if eta1 > eta2 else -1.0
+        eta1, eta2 = kc.ior_pair(ior_outside, ior_inside, woz < 0.0, False, False)
+        rx, ry, rz, ok = kc.unitize(eta1 * ox + eta2 * ix, eta1 * oy + eta2 * iy,
+                                    eta1 * oz + eta2 * iz)
+        sg = 1.0 if eta1 > eta2 else -1.0  # np.sign; eta1 == eta2 fails below
         hx, hy, hz = rx * sg, ry * sg, rz * sg
         ok = ok and eta1 != eta2
     if not ok:
         hx, hy, hz = 0.0, 0.0, 1.0
-    kh = min(abs(ox * hx + oz * hz + oy * hy), 1.0)
+    kh = min(abs(kc.dot3(ox, oy, oz, hx, hy, hz)), 1.0)
     nk2r = nk2
     if refract and tr:
         nk2r = min(max(2.0 * kh * hz - nk1, 0.0), 1.0)
     return kh, nk1, nk2r
-
-
-@njit
-def nk_cosine(oz):
-    """``saturate(|wo_L.z|)``: the ``nk1`` of :meth:`CurveLayer._estimates`."""
-    s = -1.0 if oz < 0.0 else 1.0
-    return min(max(oz * s, 0.0), 1.0)
 
 def custom_curve(c: Arr, r0: Rgb, r90: Rgb, exponent: Arr) -> Rgb:
     """MDL's Schlick-like curve ``R0 + (R90 - R0) (1 - saturate(c))^p`` per channel.

@@ -6,8 +6,9 @@ Each df module declares ``SIGNATURE = Signature(kind, params, context)``.  From 
   parameter names, MDL types and defaults;
 * :mod:`render.program` packs bound arguments into a row of float64 *slots*, in the
   declared order (``float`` 1 slot, ``float2`` 2, ``float3``/``color`` 3, ``bool``/``int``
-  1), clamped as declared, followed by the renderer context values (``ior_outside``,
-  ``ior_inside``: 1 slot each); uniform enum arguments (``mode``) go to the node's
+  1, ``float3x3`` 9: the (3, 3) array row-major, ``M[i][j]`` at slot ``3 i + j``), clamped
+  as declared, followed by the renderer context values (``ior_outside``, ``ior_inside``:
+  1 slot each); uniform enum arguments (``mode``) go to the node's
   integer ``flags`` instead (:data:`MODE_FLAGS`, :data:`THIN_WALLED`), and ``handle``
   is not packed;
 * the kernels read parameter ``name`` at ``P[row, b + SIGNATURE.offset(name)]``.
@@ -48,7 +49,8 @@ class _Required:
 REQUIRED = _Required()
 
 #: slots per MDL type (types not listed are not packed: strings, enums, dfs)
-WIDTH = {"float": 1, "float2": 2, "float3": 3, "color": 3, "bool": 1, "int": 1}
+WIDTH = {"float": 1, "float2": 2, "float3": 3, "color": 3, "bool": 1, "int": 1,
+         "float3x3": 9}
 
 #: ``flags & MODE_MASK``: ``df::scatter_mode``
 REFLECT, TRANSMIT, REFLECT_TRANSMIT = 0, 1, 2

@@ -38,17 +38,104 @@ Numerics
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
 from render.bsdf import Bsdf, BsdfSample, Lobe, check_dirs, check_samples, lane_float, lanes
+from render.df import _kernel_common as kc
+from render.df._signature import Param, Signature
 from render.frame import Frame
+from render.jit import njit
 
 __all__ = ["AnisotropicVdf", "anisotropic_vdf", "G_MAX", "hg_phase"]
 
 #: largest ``|directional_bias|`` used (values up to 1 are accepted and clamped to it)
 G_MAX = 1.0 - 1e-4
 _INV_4PI = 1.0 / (4.0 * np.pi)
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("vdf", (
+    Param("directional_bias", "float", 0.0, clamp=(-G_MAX, G_MAX)),
+    Param("handle", "string", "", uniform=True),
+))
+_BIAS = SIGNATURE.offset("directional_bias")
+_K_INV_4PI = float(_INV_4PI)
+_TWO_PI = 2.0 * float(np.pi)
+
+
+@njit
+def _hg(g, wox, woy, woz, wix, wiy, wiz):
+    """:func:`hg_phase` of one lane (``g`` in ``[-G_MAX, G_MAX]``)."""
+    if g >= 0.0:
+        sx, sy, sz = wox + wix, woy + wiy, woz + wiz
+        gp = g
+        denom = (1.0 - gp) * (1.0 - gp) + gp * kc.dot3(sx, sy, sz, sx, sy, sz)
+    else:
+        sx, sy, sz = wox - wix, woy - wiy, woz - wiz
+        gn = g
+        denom = (1.0 + gn) * (1.0 + gn) - gn * kc.dot3(sx, sy, sz, sx, sy, sz)
+    if not denom > 0.0:  # only for non-unit directions
+        return 0.0
+    return (1.0 - g * g) * _K_INV_4PI / (denom * math.sqrt(denom))
+
+
+@njit
+def _bias_of(P, row, b):
+    """The lane's ``g``, clamped to ``[-G_MAX, G_MAX]`` (kernels stay safe on any input)."""
+    return min(max(P[row, b + _BIAS], -G_MAX), G_MAX)
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """The phase function ``p`` in every channel and as the pdf -> ``(p, p, p, p)``
+    (no cosine factor; directions in any orthonormal frame)."""
+    p = _hg(_bias_of(P, row, b), wox, woy, woz, wix, wiy, wiz)
+    return p, p, p, p
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+    """Exact Henyey–Greenstein sample about ``-wo`` -> ``(wix, wiy, wiz, pdf, 1, 1, 1,
+    lobe)``; ``lobe`` DIFFUSE_REFLECTION toward the viewer's side, else
+    DIFFUSE_TRANSMISSION."""
+    g = _bias_of(P, row, b)
+    a = 2.0 * kc.clamp_u(u2x) - 1.0
+    den = 1.0 + g * a  # >= 1 - G_MAX > 0
+    cos_t = (a + 0.5 * g * (a * a + 3.0) + g * g * a + 0.5 * math.pow(g, 3.0) * (a * a - 1.0)) / (
+        den * den)
+    cos_t = min(max(cos_t, -1.0), 1.0)
+    sin_t = math.sqrt(max(1.0 - cos_t * cos_t, 0.0))
+    phi = _TWO_PI * kc.clamp_u(u2y)
+    cp = sin_t * math.cos(phi)
+    sp = sin_t * math.sin(phi)
+    nx, ny, nz = -wox, -woy, -woz
+    sx, sy, sz, tx, ty, tz = kc.frame_from_normal(nx, ny, nz)
+    wix = cp * sx + sp * tx + cos_t * nx
+    wiy = cp * sy + sp * ty + cos_t * ny
+    wiz = cp * sz + sp * tz + cos_t * nz
+    length = math.sqrt(wix * wix + wiy * wiy + wiz * wiz)
+    if not length > 0.5:  # a unit wo gives a unit wi; a zero wo fails
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    wix = wix / length
+    wiy = wiy / length
+    wiz = wiz / length
+    pdf = _hg(g, wox, woy, woz, wix, wiy, wiz)
+    back = kc.dot3(wix, wiy, wiz, wox, woy, woz) > 0.0
+    lobe = kc.LOBE_DIFFUSE_REFLECTION if back else kc.LOBE_DIFFUSE_TRANSMISSION
+    return wix, wiy, wiz, pdf, 1.0, 1.0, 1.0, lobe
+
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz):
+    """1 (the medium's single-scattering albedo is applied by :mod:`render.volume`)."""
+    return 1.0, 1.0, 1.0
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
 
 
 def _bias(value: ArrayLike) -> np.ndarray:

@@ -47,6 +47,7 @@ from render.bsdf import (
     lanes,
 )
 from render.df import _kernel_common as kc
+from render.df._albedo import node_table, table_albedo
 from render.df._common import orient, tangent_axes
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
@@ -60,6 +61,8 @@ __all__ = [
     "SIGNATURE",
     "eval_pdf",
     "sample",
+    "albedo",
+    "albedo_table",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -203,6 +206,24 @@ def _p_disk(x: Arr, y: Arr, e_u: Arr, e_v: Arr) -> Arr:
     norm = np.sqrt((e_u + 1.0) * (e_v + 1.0)) / np.pi
     return np.where(inside, norm * np.exp(expo), 0.0)
 
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz, T, t):
+    """Directional albedo ``tint E(wo)`` -> ``(a0, a1, a2)``, ``E`` read from this node's
+    table at ``T[t:]`` (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
+    ok, e_u, e_v, tx, ty = _setup(P, row, b)
+    mu = abs(woz)
+    if not (ok and mu > kc.COS_ZERO):
+        return 0.0, 0.0, 0.0
+    phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
+    E = table_albedo(T, t, mu, phi, False)
+    return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
+
+
+def albedo_table(row, flags: int = 0) -> np.ndarray:
+    """The node table :func:`albedo` reads, for one packed row (constant arguments)."""
+    ru, rv = max(row[_RU], kc.ROUGHNESS_MIN), max(row[_RV], kc.ROUGHNESS_MIN)
+    return node_table(BackscatteringGlossyReflectionBsdf, None, ru, rv)
 
 class BackscatteringGlossyReflectionBsdf(Bsdf):
     """``df::backscattering_glossy_reflection_bsdf`` over lanes.

@@ -19,11 +19,41 @@ import numpy as np
 
 from render._typing import Arr, Arr2, Rgb, Vec3
 from render.bsdf import Edf, EdfSample, check_dirs, check_samples
+from render.df import _kernel_common as kc
 from render.df._common import INV_PI
+from render.df._signature import Param, Signature
+from render.jit import njit
 from render.numerics import TOL
 from render.warp import square_to_cosine_hemisphere
 
 __all__ = ["DiffuseEdf", "diffuse_edf"]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("edf", (Param("handle", "string", "", uniform=True),))
+
+
+@njit
+def edf_eval_pdf(P, row, b, flags, wox, woy, woz):
+    """Emission per unit intensity toward ``wo`` and its density -> ``(e0, e1, e2, pdf)``:
+    ``1/pi`` and ``cos theta / pi`` on the ``+z`` side."""
+    if not woz > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0, 0.0
+    return INV_PI, INV_PI, INV_PI, woz * INV_PI
+
+
+@njit
+def edf_sample(P, row, b, flags, u1, u2x, u2y):
+    """A cosine-weighted emission direction -> ``(wox, woy, woz, pdf, w0, w1, w2)``
+    (weight ``eval cos / pdf = 1``)."""
+    x, y, z = kc.cosine_hemisphere(kc.clamp_u(u2x), kc.clamp_u(u2y))
+    if not z > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return x, y, z, z * INV_PI, 1.0, 1.0, 1.0
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
 
 
 class DiffuseEdf(Edf):

@@ -27,8 +27,9 @@ import numpy as np
 
 from render._typing import ArrayLike, Rgb, Vec3
 from render.bsdf import Lobe, check_dirs, lane_color, lane_float, lanes
+from render.df import _kernel_common as kc
 from render.df._combine import albedo_correction, cheap_albedo, check_child, is_mirror
-from render.df._layer import f82_curve, f82_curve1, unitize3
+from render.df._layer import f82_curve, f82_curve1
 from render.df._scaled import ScaledBsdf
 from render.df._signature import Param, Signature
 from render.frame import mirror_z
@@ -64,10 +65,10 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     s = -1.0 if woz < 0.0 else 1.0
     oz = woz * s
     iz = wiz * s
-    hx, hy, hz, ok = unitize3(wox + wix, woy + wiy, oz + (-iz if iz < 0.0 else iz))
+    hx, hy, hz, ok = kc.unitize(wox + wix, woy + wiy, oz + kc.mirror_z(iz, iz < 0.0))
     if not ok:
         hx, hy, hz = 0.0, 0.0, 1.0
-    kh = wox * hx + oz * hz + woy * hy
+    kh = kc.dot3(wox, woy, oz, hx, hy, hz)
     if not kh >= 0.0:
         return 0.0, 0.0, 0.0
     p = P[row, b + _EXPONENT]

@@ -46,8 +46,17 @@ import numpy as np
 from render._typing import Arr, Arr2
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._albedo import node_table, table_albedo
 from render.df._microfacet import MicrofacetBsdf, mf_finish, mf_geometry, mf_sample_dir
-from render.df._signature import MODE_MASK, REFLECT, REQUIRED, THIN_WALLED, Param, Signature
+from render.df._signature import (
+    MODE_FLAGS,
+    MODE_MASK,
+    REFLECT,
+    REQUIRED,
+    THIN_WALLED,
+    Param,
+    Signature,
+)
 from render.jit import njit
 
 __all__ = [
@@ -57,6 +66,8 @@ __all__ = [
     "SIGNATURE",
     "eval_pdf",
     "sample",
+    "albedo",
+    "albedo_table",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -209,6 +220,41 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
         wiz = -wiz
     return wix, wiy, wiz, pdf, w0, w1, w2, lobe
 
+
+@njit
+def albedo(P, row, b, flags, wox, woy, woz, T, t):
+    """Directional albedo ``tint E(wo)`` -> ``(a0, a1, a2)``, ``E`` read from this node's
+    table at ``T[t:]`` (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
+    flip = woz < 0.0
+    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
+    mu = abs(woz)
+    if not (ok and mu > kc.COS_ZERO):
+        return 0.0, 0.0, 0.0
+    phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
+    E = table_albedo(T, t, mu, phi, flip)
+    return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
+
+
+def albedo_table(row, flags: int) -> np.ndarray:
+    """The node table :func:`albedo` reads, for one packed row (constant arguments).
+
+    Parameters
+    ----------
+    row : (SIGNATURE.width,) float64
+        The node's packed slots.
+    flags : int
+        Its mode and thin-walled flags.
+    """
+    from render.df._common import ScatterMode
+
+    mode = flags & _MODE_MASK_
+    thin = (flags & _THIN_) != 0
+    ru, rv = max(row[_RU], kc.ROUGHNESS_MIN), max(row[_RV], kc.ROUGHNESS_MIN)
+    if mode == _REFLECT_ or thin:
+        return node_table(SimpleGlossyBsdf, ScatterMode.scatter_reflect, ru, rv)
+    key = {v: k for k, v in MODE_FLAGS.items()}[mode]
+    o, i = kc.ior_pair(row[_IOR_OUT], row[_IOR_IN], False, False, True)
+    return node_table(SimpleGlossyBsdf, key, ru, rv, i / o, o / i)
 
 class AshikhminShirley:
     """Anisotropic Ashikhmin–Shirley half-vector density ``D(h) (n.h)`` over lanes.

@@ -28,16 +28,141 @@ delta beam).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
 from render.bsdf import Edf, EdfSample, check_dirs, check_samples
+from render.df import _kernel_common as kc
+from render.df._signature import Param, Signature
 from render.frame import Frame
+from render.jit import njit
 from render.numerics import TOL, dot, unitize
 
 __all__ = ["SpotEdf", "spot_edf"]
 
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+
+SIGNATURE = Signature("edf", (
+    Param("exponent", "float", uniform=True, clamp=(0.0, None)),
+    Param("spread", "float", float(np.pi), uniform=True, clamp=(TOL.spread_min, float(np.pi))),
+    Param("global_distribution", "bool", True, uniform=True),
+    Param("global_frame", "float3x3", _IDENTITY, uniform=True),
+    Param("handle", "string", "", uniform=True),
+), context=tuple(f"object_to_local_{i}{j}" for i in range(3) for j in range(3)))
+"""``object_to_local_ij`` is ``M[i, j]`` of the rotation ``M`` from object space into the
+lane's local shading frame (``local = M @ v``; rows ``s``, ``t``, ``n`` of the frame, as
+``material.shade`` passes ``object_to_local`` to :class:`SpotEdf`).  ``global_frame`` is
+packed row-major (``float3x3``); the spot axis is its column 2 (slots 2, 5, 8)."""
+_EXPONENT = SIGNATURE.offset("exponent")
+_SPREAD = SIGNATURE.offset("spread")
+_GLOBAL = SIGNATURE.offset("global_distribution")
+_FRAME = SIGNATURE.offset("global_frame")
+_O2L = SIGNATURE.offset("object_to_local_00")
+_TWO_PI = 2.0 * float(np.pi)
+
+
+@njit
+def _pow(t, k):
+    """``t ** k`` as numpy evaluates it for an array ``t`` and a float ``k`` (its fast
+    paths for ``k`` = 0, 0.5, 1 and 2; libm's ``pow`` otherwise)."""
+    if k == 2.0:
+        return t * t
+    if k == 1.0:
+        return t
+    if k == 0.0:
+        return 1.0
+    if k == 0.5:
+        return math.sqrt(t)
+    return math.pow(t, k)
+
+
+@njit
+def _spot(P, row, b):
+    """The lane's lobe -> ``(k, 1 - s, norm_eval, norm_pdf, ax, ay, az, valid)``:
+    :class:`SpotEdf`'s constructor per lane (``valid`` False where ``global_frame`` maps
+    ``+z`` to a zero vector, which the numpy class rejects)."""
+    k = max(P[row, b + _EXPONENT], 0.0)
+    spread = min(max(P[row, b + _SPREAD], kc.SPREAD_MIN), kc.PI)
+    s = math.cos(0.5 * spread)
+    sn = math.sin(0.25 * spread)
+    oms = 2.0 * (sn * sn)  # 1 - s without cancellation
+    norm_eval = (k + 1.0) * (k + 2.0) / (_TWO_PI * oms * (k + 1.0 + s))
+    norm_pdf = (k + 1.0) / (_TWO_PI * oms)
+    if P[row, b + _GLOBAL] == 0.0:
+        return k, oms, norm_eval, norm_pdf, 0.0, 0.0, 1.0, True
+    # the axis: object_to_local @ (global_frame column 2)
+    vx = P[row, b + _FRAME + 2]
+    vy = P[row, b + _FRAME + 5]
+    vz = P[row, b + _FRAME + 8]
+    o = b + _O2L
+    ax = P[row, o] * vx + P[row, o + 1] * vy + P[row, o + 2] * vz
+    ay = P[row, o + 3] * vx + P[row, o + 4] * vy + P[row, o + 5] * vz
+    az = P[row, o + 6] * vx + P[row, o + 7] * vy + P[row, o + 8] * vz
+    ax, ay, az, ok = kc.unitize(ax, ay, az)
+    return k, oms, norm_eval, norm_pdf, ax, ay, az, ok
+
+
+@njit
+def _t(wox, woy, woz, ax, ay, az, oms):
+    """``SpotEdf._t``: ``max((c - s)/(1 - s), 0)`` and the emitting test."""
+    dx = wox - ax
+    dy = woy - ay
+    dz = woz - az
+    t = 1.0 - 0.5 * kc.dot3(dx, dy, dz, dx, dy, dz) / oms
+    return max(t, 0.0), t > 0.0 and woz > kc.COS_ZERO
+
+
+@njit
+def edf_eval_pdf(P, row, b, flags, wox, woy, woz):
+    """Emission per unit intensity toward ``wo`` and its density -> ``(e0, e1, e2, pdf)``."""
+    k, oms, norm_eval, norm_pdf, ax, ay, az, valid = _spot(P, row, b)
+    if not valid:
+        return 0.0, 0.0, 0.0, 0.0
+    t, ok = _t(wox, woy, woz, ax, ay, az, oms)
+    if not ok:
+        return 0.0, 0.0, 0.0, 0.0
+    tk = _pow(t, k)
+    e = norm_eval * tk
+    return e, e, e, norm_pdf * tk
+
+
+@njit
+def edf_sample(P, row, b, flags, u1, u2x, u2y):
+    """An emission direction in the cone -> ``(wox, woy, woz, pdf, w0, w1, w2)``
+    (weight ``eval cos / pdf``)."""
+    k, oms, norm_eval, norm_pdf, ax, ay, az, valid = _spot(P, row, b)
+    if not valid:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # t = (1 - u)^(1/(k+1)); 1 - cos = (1 - s)(1 - t)
+    t = math.exp(math.log1p(-kc.clamp_u(u2y)) / (k + 1.0))
+    omc = oms * (1.0 - t)
+    c = 1.0 - omc
+    st = math.sqrt(max(omc * (2.0 - omc), 0.0))
+    phi = _TWO_PI * kc.clamp_u(u2x)
+    dx = st * math.cos(phi)
+    dy = st * math.sin(phi)
+    if P[row, b + _GLOBAL] == 0.0:
+        wox, woy, woz = dx, dy, c
+    else:
+        sx, sy, sz, tx, ty, tz = kc.frame_from_normal(ax, ay, az)
+        wox = dx * sx + dy * tx + c * ax
+        woy = dx * sy + dy * ty + c * ay
+        woz = dx * sz + dy * tz + c * az
+    tt, ok = _t(wox, woy, woz, ax, ay, az, oms)
+    if not (ok and tt > 0.0):
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    tk = _pow(tt, k)
+    pdf = norm_pdf * tk
+    w = norm_eval * tk * woz / pdf
+    return wox, woy, woz, pdf, w, w, w
+
+
+# --- the numpy reference (deleted once the program adapters replace it) ----------------
 
 
 class SpotEdf(Edf):

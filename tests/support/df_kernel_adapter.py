@@ -258,3 +258,15 @@ def compare_bsdf(ref: Bsdf, ker: Bsdf, wo, wi, u1, u2, rtol: float = 0.0) -> Non
     assert_close(s1.wi, s0.wi, rtol, "sample wi")
     assert_close(s1.pdf, s0.pdf, rtol, "sample pdf")
     assert_close(s1.weight, s0.weight, rtol, "sample weight")
+
+
+def compare_edf(ref: Edf, ker: Edf, wo, u1, u2, rtol: float = 0.0) -> None:
+    """The kernel adapter ``ker`` equals the numpy edf ``ref``: eval, pdf and the samples
+    for the same variates."""
+    e1, p1 = ker.eval_pdf(wo)
+    assert_close(e1, ref.eval(wo), rtol, "eval")
+    assert_close(p1, ref.pdf(wo), rtol, "pdf")
+    s0, s1 = ref.sample(u1, u2), ker.sample(u1, u2)
+    assert_close(s1.wo, s0.wo, rtol, "sample wo")
+    assert_close(s1.pdf, s0.pdf, rtol, "sample pdf")
+    assert_close(s1.weight, s0.weight, rtol, "sample weight")
