@@ -26,8 +26,8 @@ from collections import namedtuple
 
 import numpy as np
 
+from render import interpreter
 from render.camera import primary_rays
-from render.compiled_df import BLACK, PARAM_WIDTH, covers, eval_pdf, params_of, rows_of, sample
 from render.film import empty_aovs
 from render.jit import njit
 from render.lights import (
@@ -40,6 +40,7 @@ from render.lights import (
     SpotLight,
 )
 from render.numerics import dot
+from render.program import SPECULAR_LOBES, ProgramTable
 
 __all__ = ["CompiledTrace", "compiled_reason"]
 
@@ -63,7 +64,13 @@ Tables = namedtuple(
         "faces",  # (f, 3) int64
         "face_normal",  # (f, 3)
         "face_object",  # (f,) int64
-        "params",  # (k, PARAM_WIDTH) compiled bsdf rows
+        "code",  # the objects' bsdf programs (render.program.ProgramTable)
+        "kids",
+        "frames",
+        "chat",  # their Ĉ tables
+        "roots",  # (k,) root node of object k's program, -1: black
+        "frame_lo",  # (k,) its frames
+        "frame_hi",
         "emit_hit",  # (k, 3) radiance seen when a path hits object k (front side)
         "emit_light",  # (k, 3) radiance of object k's light samples (front side)
         "area_pdf",  # (k,) light-selection probability / area
@@ -89,10 +96,6 @@ def compiled_reason(integ) -> str | None:
     """Why the scene of ``integ`` cannot take the compiled path (None: it can)."""
     if integ.media or integ.cutout.any() or integ.two_faced.any() or integ.null_candidate.any():
         return "volumes, cutouts, thin-walled backfaces and null interfaces need the general path"
-    for obj in integ.objects:
-        node = obj.material.surface.scattering
-        if node is not None and not covers(node):
-            return f"{obj.name}: its bsdf is not one elemental bsdf the kernels model"
     for light in integ.lights.lights:
         if isinstance(light, AreaLight):
             if _constant_emission(integ, light.object_id) is None:
@@ -100,6 +103,42 @@ def compiled_reason(integ) -> str | None:
         elif type(light) not in _KINDS:
             return f"{type(light).__name__} needs the general path"
     return None
+
+
+def _varying(material) -> bool:
+    """Whether an object's bsdf must be bound per lane: an argument that is a function
+    of the state, a bumped normal, a varying IOR, or a ``tangent_u``/layer ``normal``
+    given explicitly (bound in the local frame of each hit)."""
+    if material.geometry.normal is not None or callable(material.ior):
+        return True
+    node = material.surface.scattering
+    stack = [] if node is None else [node]
+    while stack:
+        n = stack.pop()
+        for key, value in n.kwargs.items():
+            if key in ("tangent_u", "normal") or callable(value):
+                return True
+            if isinstance(value, list | tuple):
+                stack.extend(v for v in value if hasattr(v, "kwargs"))
+            elif hasattr(value, "kwargs"):
+                stack.append(value)
+    return False
+
+
+def _constant_program(integ, k: int):
+    """Object ``k``'s bsdf program with one parameter row (None: black)."""
+    mat = integ.objects[k].material
+    node = mat.surface.scattering
+    if node is None or node.is_black:
+        return None
+    from displacement.state import ShadingState
+
+    one = np.array([[0.0, 0.0, 1.0]])
+    state = ShadingState(np.zeros((1, 3)), one, np.zeros((1, 2)), np.array([[1.0, 0.0, 0.0]]),
+                         np.array([[0.0, 1.0, 0.0]]), integ.objects[k].transform)
+    bsdf = node.bind(state, ior_outside=1.0, ior_inside=float(np.mean(mat.ior)),
+                     thin_walled=bool(mat.thin_walled))
+    return bsdf.program
 
 
 def _constant_emission(integ, k: int):
@@ -119,20 +158,17 @@ class CompiledTrace:
     def __init__(self, integ):
         geo = integ.geo
         n_obj = len(integ.objects)
-        params = np.zeros((n_obj, PARAM_WIDTH))  # BLACK rows unless set below
         emit_hit = np.zeros((n_obj, 3))
         emit_light = np.zeros((n_obj, 3))
         #: objects shaded per lane by numpy first (arguments that vary over the surface,
-        #: a bumped normal); the kernels take their rows and normals per lane
+        #: a bumped normal); the kernels take their programs' rows and normals per lane
         self.varying = np.zeros(n_obj, dtype=bool)
+        #: each object's bsdf program (None: black, or varying: bound per segment)
+        self.programs = [None] * n_obj
         for k, obj in enumerate(integ.objects):
-            node = obj.material.surface.scattering
-            row = None if node is None else params_of(node)
-            if row is not None:
-                params[k] = row
-            self.varying[k] = obj.material.geometry.normal is not None or (
-                node is not None and row is None
-            )
+            self.varying[k] = _varying(obj.material)
+            if not self.varying[k]:
+                self.programs[k] = _constant_program(integ, k)
             const = _constant_emission(integ, k)
             if const is not None:
                 intensity = np.broadcast_to(
@@ -176,12 +212,24 @@ class CompiledTrace:
                     light_params[j, 9:11] = light.cos_cutoff, light.cos_width
             light_first[j + 1] = light_first[j] + (len(light.faces) if kind == AREA else 0)
         self.integ = integ
+        table = ProgramTable(self.programs)
+        #: parameter rows of the constant objects (row k: object k)
+        self.params = np.zeros((n_obj, table.width))
+        for k, prog in enumerate(self.programs):
+            if prog is not None:
+                self.params[k, : prog.P.shape[1]] = prog.P[0]
         self.tables = Tables(
             geo.packed,
             geo.faces,
             geo.face_normal,
             geo.face_object.astype(np.int64),
-            params,
+            table.code,
+            table.kids,
+            table.frames,
+            table.tables,
+            table.roots,
+            table.frame_lo,
+            table.frame_hi,
             emit_hit,
             emit_light,
             np.asarray(integ.area_pdf, dtype=np.float64),
@@ -232,7 +280,7 @@ class CompiledTrace:
             prim = hit["primID"]
             face = np.where(prim >= 0, offset[np.maximum(hit["geomID"], 0)] + prim, -1)
             m = int(np.count_nonzero(prim >= 0))
-            lane_row, params, lane_normal = self._numpy_shading(
+            lane_row, params, lane_normal, tables = self._numpy_shading(
                 face, hit, d, aov if camera_rays else None
             )
             camera_rays = False
@@ -242,7 +290,7 @@ class CompiledTrace:
             u_bsdf = rng.random((m, 3))
             u_rr = rng.random(m)
             out = _bounce(
-                self.tables,
+                tables,
                 face,
                 hit["u"].astype(np.float64),
                 hit["v"].astype(np.float64),
@@ -278,10 +326,10 @@ class CompiledTrace:
         for the kernels) and, given ``aov`` (camera rays, AOVs asked for), of every hit
         (its AOVs).
 
-        Returns ``lane_row`` (m,), ``params`` (k + q, PARAM_WIDTH): the objects' rows, then
-        one per varying lane, and ``normals`` (q, 3): lane ``i`` takes row
-        ``k + lane_row[i]`` and normal ``lane_row[i]``, or its object's row where
-        ``lane_row[i] = -1``.
+        Returns ``lane_row`` (m,), ``params`` (k + q, width): the objects' rows, then
+        one per varying lane, ``normals`` (q, 3): lane ``i`` takes row ``k + lane_row[i]``
+        and normal ``lane_row[i]``, or its object's row where ``lane_row[i] = -1``; and
+        the kernel tables with this segment's programs of the varying objects.
         """
         integ = self.integ
         hit_objects = integ.geo.face_object[np.maximum(face, 0)]
@@ -289,7 +337,8 @@ class CompiledTrace:
         q = int(np.count_nonzero(varying))
         lane_row = np.full(len(face), -1, dtype=np.int64)
         lane_row[varying] = np.arange(q)
-        params = np.empty((q, PARAM_WIDTH))
+        programs = list(self.programs)
+        rows = []
         normals = np.empty((q, 3))
         lanes = np.flatnonzero(face >= 0 if aov is not None else varying)
         objs = hit_objects[lanes]
@@ -306,9 +355,21 @@ class CompiledTrace:
                 wo = integ._frame(k, sh, ns, tu).to_local(-d[sel])
                 integ.write_aovs(aov, sel, k, sh.bsdf, wo, nw, p, uv)
             if self.varying[k]:
-                params[lane_row[sel]] = rows_of(sh.bsdf, len(sel))
+                if sh.bsdf is not None:
+                    programs[k] = sh.bsdf.program
+                    rows.append((lane_row[sel], sh.bsdf.program.P))
                 normals[lane_row[sel]] = nw
-        return lane_row, np.concatenate([self.tables.params, params]), normals
+        if not rows:
+            return lane_row, self.params, normals, self.tables
+        table = ProgramTable(programs)
+        params = np.zeros((len(self.params) + q, table.width))
+        params[: len(self.params), : self.params.shape[1]] = self.params
+        for at, P in rows:
+            params[len(self.params) + at, : P.shape[1]] = P
+        tables = self.tables._replace(
+            code=table.code, kids=table.kids, frames=table.frames, chat=table.tables,
+            roots=table.roots, frame_lo=table.frame_lo, frame_hi=table.frame_hi)
+        return lane_row, params, normals, tables
 
 
 # ------------------------------------------------------------------------- kernels
@@ -556,7 +617,13 @@ def _bounce(
         faces,
         face_normal,
         face_object,
-        object_params,
+        code,
+        kids,
+        frames,
+        chat,
+        roots,
+        frame_lo,
+        frame_hi,
         emit_hit,
         emit_light,
         area_pdf,
@@ -578,7 +645,8 @@ def _bounce(
     select, eps = scalars[0], scalars[1]
     max_depth, rr_depth = scalars[2], scalars[3]
     n_lights = len(light_object)
-    n_objects = len(object_params)
+    n_objects = len(roots)
+    ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
     tp = packed
     s_org = np.empty((m, 3))
     s_dir = np.empty((m, 3))
@@ -657,8 +725,10 @@ def _bounce(
             w = 1.0 if prev_delta[i] else _power(prev_pdf[i], pl)
             for c in range(3):
                 L[lane, c] += beta[i, c] * e[k, c] * w
-        if params[row, 0] == BLACK or not depth[i] < max_depth:
+        root = roots[k]
+        if root < 0 or not depth[i] < max_depth:
             continue
+        f_lo, f_hi = frame_lo[k], frame_hi[k]
         # next-event estimation
         j = min(int(u_light[r, 0] * n_lights), n_lights - 1)
         lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta = _sample_light(
@@ -689,7 +759,8 @@ def _bounce(
         wlx = _dot(lx, ly, lz, sx, sy, sz)
         wly = _dot(lx, ly, lz, qx, qy, qz)
         wlz = _dot(lx, ly, lz, nx, ny, nz)
-        f0, f1, f2, pb = eval_pdf(params, row, wox, woy, woz, wlx, wly, wlz)
+        f0, f1, f2, pb = interpreter.eval_pdf(code, kids, frames, params, chat, row, ws, root,
+                                              f_lo, f_hi, wox, woy, woz, wlx, wly, wlz)
         g_wi = _dot(lx, ly, lz, gx, gy, gz)
         if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
             w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf
@@ -717,11 +788,13 @@ def _bounce(
                 s_id[ns] = lane
                 ns += 1
         # the bsdf's sample continues the path
-        wix, wiy, wiz, pdf, w0, w1, w2, delta, valid = sample(
-            params, row, wox, woy, woz, u_bsdf[r, 0], u_bsdf[r, 1], u_bsdf[r, 2]
+        wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
+            code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
+            u_bsdf[r, 0], u_bsdf[r, 1], u_bsdf[r, 2]
         )
-        if not valid or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
+        if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
             continue
+        delta = (lobe & SPECULAR_LOBES) != 0
         dx = wix * sx + wiy * qx + wiz * nx
         dy = wix * sy + wiy * qy + wiz * ny
         dz = wix * sz + wiy * qz + wiz * nz

@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from render.df._signature import MODE_MASK, REFLECT
 from render.df.anisotropic_vdf import albedo as _vdf_albedo
 from render.df.anisotropic_vdf import eval_pdf as _vdf_eval_pdf
 from render.df.anisotropic_vdf import sample as _vdf_sample
@@ -46,6 +47,7 @@ from render.df.diffuse_reflection_bsdf import sample as _dr_sample
 from render.df.diffuse_transmission_bsdf import albedo as _dt_albedo
 from render.df.diffuse_transmission_bsdf import eval_pdf as _dt_eval_pdf
 from render.df.diffuse_transmission_bsdf import sample as _dt_sample
+from render.df.directional_factor import curve_constant as _df_constant
 from render.df.directional_factor import scale as _df_scale
 from render.df.fresnel_layer import curve_constant as _fr_curve_constant
 from render.df.fresnel_layer import curve_h as _fr_curve_h
@@ -89,6 +91,7 @@ from render.program import (
     O_DIFFUSE_EDF,
     O_DIFFUSE_REFLECTION,
     O_DIFFUSE_TRANSMISSION,
+    O_DIRECTIONAL_FACTOR,
     O_FRESNEL_LAYER,
     O_NORMALIZED_MIX,
     O_NORMALIZED_MIX_EDF,
@@ -118,9 +121,9 @@ __all__ = [
 
 # per-node registers (R floats per node): value, pdf, contributes, cheap albedo,
 # selection probability of the layer child, Ĉ(wo), wo agrees with the layer frame,
-# Ĉ(wi), a scratch direction
-_F, _PDF, _ON, _CH, _SEL, _CO, _AGO, _CW, _TMP = 0, 3, 4, 5, 8, 9, 12, 13, 16
-_R = 19
+# Ĉ(wi), a scratch direction, the full albedo (untouched by prepare and evaluate)
+_F, _PDF, _ON, _CH, _SEL, _CO, _AGO, _CW, _TMP, _AL = 0, 3, 4, 5, 8, 9, 12, 13, 16, 19
+_R = 22
 # per-child registers: factor (3), selection probability, contributes, mix weight (3)
 _KF, _KSEL, _KON, _KW = 0, 3, 4, 5
 _KR = 8
@@ -176,18 +179,19 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y):
 
 
 @njit
-def leaf_albedo(op, P, row, b, flags, ox, oy, oz):
-    """Directional albedo ``(a0, a1, a2)`` of the leaf df ``op``."""
+def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
+    """Directional albedo ``(a0, a1, a2)`` of the leaf df ``op`` (glossy lobes read their
+    node's albedo table at ``tables[t:]``)."""
     if op == O_DIFFUSE_REFLECTION:
         return _dr_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_SIMPLE_GLOSSY:
-        return _sg_albedo(P, row, b, flags, ox, oy, oz)
+        return _sg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_SPECULAR:
         return _sp_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_DIFFUSE_TRANSMISSION:
         return _dt_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_BACKSCATTERING_GLOSSY:
-        return _bg_albedo(P, row, b, flags, ox, oy, oz)
+        return _bg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_albedo(P, row, b, flags, ox, oy, oz)
     return 0.0, 0.0, 0.0
@@ -328,11 +332,11 @@ def _set_bases(frames, P, row, ws, fo, f0, f1):
             ws[o + _FT + 1] = 1.0
             ws[o + _FN + 2] = 1.0
             continue
-        s = frames[f, 1]
+        s, t = frames[f, 1], frames[f, 2]
         nx, ny, nz, ok = _unit(P[row, s], P[row, s + 1], P[row, s + 2])
         if not ok:
             nx, ny, nz = 0.0, 0.0, 1.0
-        tx, ty, tz = P[row, s + 3], P[row, s + 4], P[row, s + 5]
+        tx, ty, tz = P[row, t], P[row, t + 1], P[row, t + 2]
         c = tx * nx + ty * ny + tz * nz
         px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
         sx, sy, sz, ok = _unit(px, py, pz)
@@ -440,7 +444,8 @@ def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
             if op == O_DIFFUSE_EDF or op == O_SPOT_EDF:
                 ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = 1.0, 1.0, 1.0
             else:
-                a0, a1, a2 = leaf_albedo(op, P, row, b, fl, wo[0], wo[1], wo[2])
+                a0, a1, a2 = leaf_albedo(op, P, row, b, fl, wo[0], wo[1], wo[2], tables,
+                                         code[k, TABLE])
                 ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = a0, a1, a2
             continue
         k0 = code[k, KID0]
@@ -727,23 +732,152 @@ def cheap_albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, o
 
 
 @njit
-def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy, oz):
-    """Directional albedo: exact for a leaf, else the mean sample weight over the
-    quadrature ``points`` (m, 3) (``u1, u2x, u2y``), clipped to [0, 1]."""
-    if _is_leaf(code[root, OP]):
-        return leaf_albedo(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
-                           ox, oy, oz)
-    a0 = a1 = a2 = 0.0
+def _layer_factors_at(code, kids, frames, P, tables, row, ws, k, f0, f1, x, y, z):
+    """Layer ``k``'s factors ``(f_layer, f_base)`` at ``wi = (x, y, z)`` (frame ``f0``),
+    the layer factor masked where a direction leaves the two tangent planes' common
+    side; after :func:`prepare` at ``wo``."""
+    n = code.shape[0]
+    fo = n * _R + kids.shape[0] * _KR
+    _set_dirs(frames, ws, fo, f0, f1, _FWI, x, y, z)
+    r = k * _R
+    fr = fo + code[k, FRAME] * _FR
+    lf = fo + code[k, LFRAME] * _FR
+    wo = ws[fr + _FWO:fr + _FWO + 3]
+    wi = ws[fr + _FWI:fr + _FWI + 3]
+    wol = ws[lf + _FWO:lf + _FWO + 3]
+    wil = ws[lf + _FWI:lf + _FWI + 3]
+    agi = _agree(code[k, LFRAME] == code[k, FRAME], wi, wil)
+    c0 = c1 = c2 = 0.0
+    t = code[k, TABLE]
+    if t != CHAT_NONE and agi:
+        c0, c1, c2 = chat_lookup(tables, t, wil[0], wil[1], wil[2])
+    ws[r + _CW], ws[r + _CW + 1], ws[r + _CW + 2] = c0, c1, c2
+    fl0, fl1, fl2, fb0, fb1, fb2 = _layer_factors(
+        code[k, OP], P, row, code[k, BASE], code[k, FLAGS], wo, wi, wol, wil,
+        ws[r + _CO:r + _CO + 3], ws[r + _CW:r + _CW + 3])
+    if not (ws[r + _AGO] > 0.0 and agi):
+        fl0 = fl1 = fl2 = 0.0
+    return fl0, fl1, fl2, fb0, fb1, fb2
+
+
+@njit
+def _is_mirror(code, c):
+    """Node ``c`` is ``specular_bsdf`` reflecting: it scatters to the mirror direction."""
+    return c >= 0 and code[c, OP] == O_SPECULAR and (code[c, FLAGS] & MODE_MASK) == REFLECT
+
+
+@njit
+def _correction(code, kids, frames, P, tables, row, ws, k, child, which, e0, e1, e2, f0, f1,
+                ox, oy, oz, points):
+    """``∫ (factor(wi) - e) child.eval(wo, wi) dwi`` through the child's own sampler over
+    ``points`` (``render.df._combine.albedo_correction``): ``which`` picks the factor
+    (0 the layer's, 1 the base's, 2 a scaled node's)."""
+    s0 = s1 = s2 = 0.0
     m = points.shape[0]
     for i in range(m):
-        s = sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz,
+        s = sample(code, kids, frames, P, tables, row, ws, child, f0, f1, ox, oy, oz,
                    points[i, 0], points[i, 1], points[i, 2])
-        if s[7] != 0:
-            a0 += s[4]
-            a1 += s[5]
-            a2 += s[6]
-    return (min(max(a0 / m, 0.0), 1.0), min(max(a1 / m, 0.0), 1.0),
-            min(max(a2 / m, 0.0), 1.0))
+        if s[7] == 0:
+            continue
+        # the node's own registers at wo again (the child's pass rewrote shared frames)
+        prepare(code, kids, frames, P, tables, row, ws, k, k, f0, f1, ox, oy, oz)
+        if which == 2:
+            n = code.shape[0]
+            fo = n * _R + kids.shape[0] * _KR
+            _set_dirs(frames, ws, fo, f0, f1, _FWI, s[0], s[1], s[2])
+            fr = fo + code[k, FRAME] * _FR
+            g0, g1, g2 = _scale(code[k, OP], P, row, code[k, BASE], code[k, FLAGS],
+                                ws[fr + _FWO:fr + _FWO + 3], ws[fr + _FWI:fr + _FWI + 3])
+        else:
+            a = _layer_factors_at(code, kids, frames, P, tables, row, ws, k, f0, f1,
+                                  s[0], s[1], s[2])
+            g0, g1, g2 = (a[0], a[1], a[2]) if which == 0 else (a[3], a[4], a[5])
+        s0 += (g0 - e0) * s[4]
+        s1 += (g1 - e1) * s[5]
+        s2 += (g2 - e2) * s[6]
+    return s0 / m, s1 / m, s2 / m
+
+
+@njit
+def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy, oz):
+    """Directional albedo of the program at ``wo`` (``Bsdf.albedo``): exact for the
+    elemental dfs, mixes, weighted layers in their own frame and ``tint``; the
+    directional combiners add the integral of their factors' deviation from their value
+    at ``wo`` through each child's sampler over ``points`` (``render.df._combine``'s
+    control variate).  Clipped to [0, 1] for layers (they never gain energy)."""
+    n = code.shape[0]
+    ko = n * _R
+    fo = ko + kids.shape[0] * _KR
+    lo = root - code[root, SIZE] + 1
+    for k in range(lo, root + 1):
+        op = code[k, OP]
+        b = code[k, BASE]
+        fl = code[k, FLAGS]
+        r = k * _R
+        prepare(code, kids, frames, P, tables, row, ws, k, k, f0, f1, ox, oy, oz)
+        fr = fo + code[k, FRAME] * _FR
+        wo = ws[fr + _FWO:fr + _FWO + 3]
+        a0 = a1 = a2 = 0.0
+        if _is_leaf(op):
+            a0, a1, a2 = leaf_albedo(op, P, row, b, fl, wo[0], wo[1], wo[2], tables,
+                                     code[k, TABLE])
+        elif _is_mix(op):
+            k0 = code[k, KID0]
+            for j in range(code[k, NKIDS]):
+                c = kids[k0 + j]
+                if c != _NO_KID:
+                    o = ko + (k0 + j) * _KR
+                    a0 += ws[o + _KW] * ws[c * _R + _AL]
+                    a1 += ws[o + _KW + 1] * ws[c * _R + _AL + 1]
+                    a2 += ws[o + _KW + 2] * ws[c * _R + _AL + 2]
+        elif _is_layer(op):
+            k0 = code[k, KID0]
+            lay, bas = kids[k0], kids[k0 + 1]
+            lf = fo + code[k, LFRAME] * _FR
+            wol = ws[lf + _FWO:lf + _FWO + 3]
+            el0, el1, el2, eb0, eb1, eb2 = _layer_estimates(op, P, row, b, fl, wo, wol,
+                                                            ws[r + _CO:r + _CO + 3])
+            if not ws[r + _AGO] > 0.0:
+                el0 = el1 = el2 = 0.0
+            identity = code[k, LFRAME] == code[k, FRAME]
+            directional = op != O_WEIGHTED_LAYER
+            if lay != _NO_KID:
+                q = lay * _R + _AL
+                a0, a1, a2 = el0 * ws[q], el1 * ws[q + 1], el2 * ws[q + 2]
+                if not (identity and (not directional or _is_mirror(code, lay))):
+                    d0, d1, d2 = _correction(code, kids, frames, P, tables, row, ws, k, lay,
+                                             0, el0, el1, el2, f0, f1, ox, oy, oz, points)
+                    a0, a1, a2 = a0 + d0, a1 + d1, a2 + d2
+            if bas != _NO_KID:
+                q = bas * _R + _AL
+                if directional and _is_mirror(code, bas):
+                    prepare(code, kids, frames, P, tables, row, ws, k, k, f0, f1, ox, oy, oz)
+                    m = _layer_factors_at(code, kids, frames, P, tables, row, ws, k, f0, f1,
+                                          -ox, -oy, oz)
+                    a0, a1, a2 = a0 + m[3] * ws[q], a1 + m[4] * ws[q + 1], a2 + m[5] * ws[q + 2]
+                else:
+                    a0, a1, a2 = a0 + eb0 * ws[q], a1 + eb1 * ws[q + 1], a2 + eb2 * ws[q + 2]
+                    if directional:
+                        d0, d1, d2 = _correction(code, kids, frames, P, tables, row, ws, k,
+                                                 bas, 1, eb0, eb1, eb2, f0, f1, ox, oy, oz,
+                                                 points)
+                        a0, a1, a2 = a0 + d0, a1 + d1, a2 + d2
+            a0, a1, a2 = min(max(a0, 0.0), 1.0), min(max(a1, 0.0), 1.0), min(max(a2, 0.0), 1.0)
+        else:  # tint, directional_factor: the factor at the mirror direction, corrected
+            c = kids[code[k, KID0]]
+            if c != _NO_KID:
+                ws[r + _TMP], ws[r + _TMP + 1], ws[r + _TMP + 2] = -wo[0], -wo[1], wo[2]
+                e0, e1, e2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3])
+                q = c * _R + _AL
+                a0, a1, a2 = e0 * ws[q], e1 * ws[q + 1], e2 * ws[q + 2]
+                if op == O_DIRECTIONAL_FACTOR and not (_is_mirror(code, c) or
+                                                       _df_constant(P, row, b, fl)):
+                    d0, d1, d2 = _correction(code, kids, frames, P, tables, row, ws, k, c, 2,
+                                             e0, e1, e2, f0, f1, ox, oy, oz, points)
+                    a0, a1, a2 = max(a0 + d0, 0.0), max(a1 + d1, 0.0), max(a2 + d2, 0.0)
+        ws[r + _AL], ws[r + _AL + 1], ws[r + _AL + 2] = a0, a1, a2
+    q = root * _R + _AL
+    return ws[q], ws[q + 1], ws[q + 2]
 
 
 # ------------------------------------------------------------------ EDF programs
@@ -983,7 +1117,8 @@ def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):
             c0, c1, c2 = s0 / m, s1 / m, s2 / m
             if controlled:
                 a0, a1, a2 = leaf_albedo(code[lay, OP], P, row, code[lay, BASE],
-                                         code[lay, FLAGS], vx, vy, vz)
+                                         code[lay, FLAGS], vx, vy, vz, tables,
+                                         code[lay, TABLE])
                 c0, c1, c2 = c0 + n0 * a0, c1 + n1 * a1, c2 + n2 * a2
             if not abs(vz) > 0.0:
                 c0 = c1 = c2 = 0.0

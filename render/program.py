@@ -16,9 +16,10 @@ to target code:
 * ``P`` (rows, S) float64: every node's parameters packed by its df's
   :class:`~render.df._signature.Signature` (clamped), one row per lane (or one row for
   all lanes).
-* ``frames`` (F, 2) int64: ``[parent, slot]``: frame 0 is the shading frame (parent
-  -1); a layer with its own ``normal`` has a frame whose normal and ``tangent_u`` (in
-  the parent frame) sit at ``P[row, slot:slot + 6]``.  Frames are listed parents first.
+* ``frames`` (F, 3) int64: ``[parent, normal slot, tangent slot]``: frame 0 is the
+  shading frame (parent -1); a layer with its own ``normal`` has a frame whose normal
+  and ``tangent_u`` (in the parent frame) sit at ``P[row, slot:slot + 3]``.  Frames
+  are listed parents first.
 * ``tables``: the curve layers' curve-weighted albedos Ĉ (:mod:`render.df._layer`),
   tabulated once per distinct layer by the interpreter itself.
 
@@ -45,9 +46,19 @@ from functools import lru_cache
 import numpy as np
 
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe, check_dirs, check_samples
-from render.df._signature import MODE_FLAGS, THIN_WALLED, Signature
+from render.df._signature import MODE_FLAGS, REQUIRED, THIN_WALLED, Signature
 
-__all__ = ["Program", "ProgramBsdf", "ProgramEdf", "ProgramTable", "leaf_program", "combine"]
+__all__ = [
+    "Program",
+    "ProgramBsdf",
+    "ProgramEdf",
+    "ProgramTable",
+    "leaf_program",
+    "layer_program",
+    "mix_program",
+    "combine",
+    "pack",
+]
 
 # ----------------------------------------------------------------------------- layout
 OP, BASE, FRAME, NKIDS, KID0, FLAGS, LFRAME, TABLE, SIZE, WIDTH = range(10)
@@ -58,8 +69,11 @@ CHAT_NONE = -2
 #: Ĉ table: nodes over the layer-frame polar angle, azimuths kept (largest), Sobol
 #: points per direction (render.df._layer's CURVE_ALBEDO_* values)
 CHAT_THETA, CHAT_PHI, CHAT_POINTS, CHAT_MU_MIN = 17, 4, 512, 1e-3
-#: quadrature points of a combiner's full albedo (Sobol, through its own sampler)
-ALBEDO_POINTS = 256
+#: quadrature points of a combiner's albedo correction (through a child's sampler; a
+#: Fibonacci number: the u2 points form a Fibonacci lattice).  Measured accuracy
+#: (tests/render/df): about 5e-3 where the factors are smooth, 2e-2 where they jump
+#: (total internal reflection in a Fresnel coat, the horizon of a tilted layer normal).
+ALBEDO_POINTS = 89
 
 # opcodes: one per distribution function (a new df is a new opcode)
 (
@@ -98,7 +112,7 @@ class Program:
     kind : {"bsdf", "edf"}
     code : (N, NCOL) int64
     kids : (K,) int64
-    frames : (F, 2) int64
+    frames : (F, 3) int64
     P : (rows, S) float64
     tables : (T,) float64
     lobes : Lobe
@@ -184,8 +198,8 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
         if not p.width:
             continue
         value = values.get(p.name, p.default)
-        if isinstance(value, str) or value is None:
-            raise ValueError(f"{name} needs the argument {p.name!r}")
+        if value is REQUIRED or isinstance(value, str) or value is None:
+            raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
         a = _as_rows(value, p.width, f"{name}({p.name})")
         if p.clamp is not None:
             a = np.clip(a, p.clamp[0], p.clamp[1])
@@ -201,31 +215,38 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
 
 
 def leaf_program(kind: str, op: int, signature: Signature, values: dict, lobes: Lobe,
-                 name: str) -> Program:
-    """The program of one elemental df."""
+                 name: str, albedo_table=None) -> Program:
+    """The program of one elemental df; ``albedo_table(row, flags)``, for dfs whose
+    albedo kernel reads a node table (the glossy lobes), builds it from row 0."""
     P, flags = pack(signature, values, name)
     code = np.zeros((1, NCOL), dtype=np.int64)
     code[0, OP], code[0, FLAGS], code[0, SIZE], code[0, WIDTH] = op, flags, 1, P.shape[1]
     code[0, TABLE] = CHAT_NONE
-    return Program(kind, code, np.zeros(0, dtype=np.int64), np.array([[-1, 0]], dtype=np.int64),
-                   np.ascontiguousarray(P), np.zeros(0), lobes)
+    tables = np.zeros(0)
+    if albedo_table is not None:
+        tables = np.asarray(albedo_table(P[0], flags), dtype=np.float64)
+        code[0, TABLE] = 0
+    return Program(kind, code, np.zeros(0, dtype=np.int64),
+                   np.array([[-1, 0, 0]], dtype=np.int64), np.ascontiguousarray(P), tables,
+                   lobes)
 
 
 def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
-            frame: np.ndarray | None = None, curve_columns: np.ndarray | None = None) -> Program:
+            frame: tuple | None = None, curve_columns: np.ndarray | None = None) -> Program:
     """The program of a combiner over ``children`` (Programs, or None for ``bsdf()``).
 
     Parameters
     ----------
     columns : (rows, w) float64
         The node's own packed parameters (:func:`pack`, or a mix's weights).
-    frame : (rows, 6) float64, optional
-        A layer's own normal and ``tangent_u`` in the inherited frame (None: the layer
-        child shares the node's frame).  Only for layers; children[0] is the layer.
+    frame : (int, (rows, 3) float64), optional
+        A layer's own frame: the offset of its ``normal`` (inherited frame) in
+        ``columns``, and ``tangent_u`` in the inherited frame (None: the layer child
+        shares the node's frame).  Only for layers; ``children[0]`` is the layer.
     curve_columns : (w,) bool, optional
         Which of ``columns`` the layer's curve depends on (for its Ĉ table).
     """
-    codes, kid_lists, frame_rows, Ps, tabs = [], [], [[-1, 0]], [], []
+    codes, kid_lists, frame_rows, Ps, tabs = [], [], [[-1, 0, 0]], [], []
     roots, lobes = [], Lobe.NONE
     n_nodes = n_slots = n_tab = 0
     layer_frame = 0
@@ -239,12 +260,13 @@ def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
         fmap = np.zeros(len(child.frames), dtype=np.int64)
         if i == 0 and frame is not None:
             layer_frame = len(frame_rows)
-            frame_rows.append([0, -1])  # the layer frame; slot set below
+            frame_rows.append([0, -1, -1])  # the layer frame; slots set below
             fmap[0] = layer_frame
         for f in range(1, len(child.frames)):
             fmap[f] = len(frame_rows)
-            parent, slot = child.frames[f]
-            frame_rows.append([fmap[parent] if parent >= 0 else fmap[0], slot + n_slots])
+            parent, ns, ts = child.frames[f]
+            frame_rows.append([fmap[parent] if parent >= 0 else fmap[0], ns + n_slots,
+                               ts + n_slots])
         c[:, FRAME] = fmap[c[:, FRAME]]
         c[:, LFRAME] = fmap[c[:, LFRAME]]
         c[:, BASE] += n_slots
@@ -259,10 +281,10 @@ def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
         n_nodes += len(c)
         n_slots += child.P.shape[1]
         n_tab += len(child.tables)
-    own = [columns] + ([frame] if frame is not None else [])
+    own = [columns] + ([frame[1]] if frame is not None else [])
     P = np.ascontiguousarray(_stack(Ps + own))
     if frame is not None:
-        frame_rows[layer_frame][1] = n_slots + columns.shape[1]
+        frame_rows[layer_frame][1:] = [n_slots + frame[0], n_slots + columns.shape[1]]
     kids = np.concatenate(kid_lists + [np.array(roots, dtype=np.int64)]) if kid_lists else \
         np.array(roots, dtype=np.int64)
     node = np.zeros((1, NCOL), dtype=np.int64)
@@ -274,11 +296,55 @@ def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
     node[0, WIDTH] = P.shape[1] - n_slots
     code = np.concatenate(codes + [node]) if codes else node
     program = Program(kind, np.ascontiguousarray(code), kids,
-                      np.array(frame_rows, dtype=np.int64).reshape(-1, 2), P,
+                      np.array(frame_rows, dtype=np.int64).reshape(-1, 3), P,
                       np.concatenate(tabs) if tabs else np.zeros(0), lobes)
     if curve_columns is not None:
         program = _with_chat_table(program, curve_columns)
     return program
+
+
+def layer_program(op: int, signature: Signature, values: dict, layer, base, normal,
+                  tangent_u, name: str) -> Program:
+    """The program of a layer node over bound children (Program or None).
+
+    ``normal`` and ``tangent_u`` are the layer's normal and the texture tangent in the
+    inherited local frame (``(3,)`` or ``(rows, 3)``); a frame equal to the inherited
+    one (within 1e-12) adds no frame.  The layer's curve depends on every packed value
+    but ``weight`` and ``normal`` (its Ĉ table's key).
+    """
+    from render.frame import Frame
+    from render.numerics import unitize
+
+    nrm, ok = unitize(_as_rows(normal, 3, f"{name}(normal)"))
+    if not np.all(ok):
+        raise ValueError(f"{name}: normal must be a non-zero vector (the layer's surface "
+                         "normal)")
+    tu = _as_rows(tangent_u, 3, f"{name}(tangent_u)")
+    n = _rows([nrm, tu])
+    frame = Frame.from_normal_tangent(np.broadcast_to(nrm, (n, 3)), np.broadcast_to(tu, (n, 3)))
+    eye = np.eye(3)
+    identity = all(np.all(np.abs(a - e) <= 1e-12) for a, e in
+                   zip((frame.s, frame.t, frame.n), eye, strict=True))
+    columns, flags = pack(signature, dict(values, normal=nrm), name)
+    curve = np.ones(signature.width, dtype=bool)
+    for p in ("weight", "normal"):
+        at = signature.offset(p)
+        curve[at:at + signature.param(p).width] = False
+    children = [None if c is None else c.program for c in (layer, base)]
+    return combine("bsdf", op, columns, flags, children,
+                   frame=None if identity else (signature.offset("normal"), tu),
+                   curve_columns=curve)
+
+
+def mix_program(kind: str, op: int, components: list, color: bool) -> Program:
+    """The program of a mix of ``components`` (``render.df._mix`` component structs):
+    each component's weight packed as a colour (3 slots, in order), its df a child."""
+    from render.df._mix import component_signature
+
+    sig_c = component_signature(color, kind == "edf")
+    cols = [pack(sig_c, {"weight": c.weight}, f"{kind} component")[0] for c in components]
+    children = [None if c.component is None else c.component.program for c in components]
+    return combine(kind, op, _stack(cols), 0, children)
 
 
 # ----------------------------------------------------------------------------- Ĉ tables
@@ -338,7 +404,7 @@ def _with_chat_table(program: Program, curve_columns: np.ndarray) -> Program:
 
 
 @lru_cache(maxsize=1)
-def _chat_directions() -> np.ndarray:
+def _chat_directions() -> np.ndarray:  # noqa: D401
     """(2, THETA * PHI, 3): the layer-frame directions of each side of a Ĉ table
     (uniform in the polar angle from the pole to ``acos(CHAT_MU_MIN)``; azimuths 0, 45,
     90, 135 degrees)."""
@@ -353,6 +419,30 @@ def _chat_directions() -> np.ndarray:
                              axis=-1).reshape(-1, 3)
     out.setflags(write=False)
     return out
+
+
+@lru_cache(maxsize=1)
+def albedo_points(m: int = ALBEDO_POINTS) -> np.ndarray:
+    """``m`` quadrature points in [0, 1)^3 (columns ``u1, u2x, u2y``), shape (m', 3):
+    ``u2`` the Fibonacci lattice ``((i + 1/2)/m', frac((i g + 1/2)/m'))`` with ``m'`` the
+    first Fibonacci number ``>= m`` and ``g`` its predecessor, ``u1 = frac(1/2 + i (sqrt 2
+    - 1))``.
+
+    Examples
+    --------
+    >>> p = albedo_points(8)
+    >>> p.shape, bool(np.all((p >= 0) & (p < 1)))
+    ((8, 3), True)
+    """
+    fib = [1, 2]
+    while fib[-1] < m:
+        fib.append(fib[-1] + fib[-2])
+    m, g = fib[-1], fib[-2]
+    i = np.arange(m)
+    pts = np.stack([np.mod(0.5 + i * (np.sqrt(2.0) - 1.0), 1.0), (i + 0.5) / m,
+                    np.mod((i * g + 0.5) / m, 1.0)], axis=1)
+    pts.setflags(write=False)
+    return pts
 
 
 @lru_cache(maxsize=8)
@@ -433,7 +523,8 @@ class ProgramTable:
             width = max(width, p.P.shape[1])
         self.code = np.concatenate(codes) if codes else np.zeros((1, NCOL), dtype=np.int64)
         self.kids = np.concatenate(kids) if kids else np.zeros(0, dtype=np.int64)
-        self.frames = np.concatenate(frames) if frames else np.array([[-1, 0]], dtype=np.int64)
+        self.frames = (np.concatenate(frames) if frames
+                       else np.array([[-1, 0, 0]], dtype=np.int64))
         self.tables = np.concatenate(tables) if tables else np.zeros(0)
         #: columns of a parameter row that holds any of the programs
         self.width = max(width, 1)
@@ -501,7 +592,7 @@ class ProgramBsdf(Bsdf):
         (wo,) = check_dirs(wo, names=("wo",))
         _lane_program(self.program, len(wo))
         out = np.empty((len(wo), 3))
-        interpreter.albedo_batch(*self._args(), wo, sobol_points(ALBEDO_POINTS), out)
+        interpreter.albedo_batch(*self._args(), wo, albedo_points(), out)
         return out
 
     def cheap_albedo(self, wo):
@@ -554,3 +645,102 @@ class ProgramEdf(Edf):
         interpreter.edf_sample_batch(*self._args(), np.ascontiguousarray(u1),
                                      np.ascontiguousarray(u2), wo, pdf, w)
         return EdfSample(wo, pdf, w)
+
+
+# ----------------------------------------------------------------------------- df classes
+_CONTEXT_DEFAULTS = {"ior_outside": 1.0, "ior_inside": 1.0, "thin_walled": False}
+
+
+def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=None,
+             unsupported: tuple = (), albedo_table=None, module: str = "render.df") -> type:
+    """The Python class of a df: MDL's parameters (from ``signature``) as keywords or in
+    MDL's order, plus the renderer context the kernels read; instances are
+    :class:`ProgramBsdf` (or :class:`ProgramEdf`) whose program is the df.
+
+    Children (``bsdf``/``edf`` parameters) are bound dfs or None (MDL's black df).  A
+    layer (children ``layer`` and ``base`` and a ``normal``) also takes ``tangent_u``,
+    both in the inherited local frame.  ``lobes``: a :class:`Lobe` or a dict from the
+    scatter mode's name to the lobes of an elemental df.  ``unsupported``: parameters
+    that must stay at their defaults.  ``albedo_table``: see :func:`leaf_program`.
+    """
+    import inspect
+
+    params = [p for p in signature.params if p.name != "handle" and p.mdl]
+    names = [p.name for p in params]
+    children = [p.name for p in params if p.type in ("bsdf", "edf")]
+    is_layer = children == ["layer", "base"] and "normal" in names
+    extra = []
+    if is_layer:
+        extra.append(("tangent_u", (1.0, 0.0, 0.0)))
+    if signature.context:
+        extra += [(c, _CONTEXT_DEFAULTS.get(c)) for c in signature.context]
+        extra.append(("thin_walled", False))
+    defaults = {}
+    for p in params:
+        d = p.default
+        if p.name == "normal" and is_layer:
+            d = (0.0, 0.0, 1.0)
+        elif p.name == "tangent_u":
+            d = (1.0, 0.0, 0.0)
+        elif isinstance(d, str) and d in names:
+            d = None  # the value of another parameter (roughness_v = roughness_u)
+        defaults[p.name] = d
+    pysig = inspect.Signature(
+        [inspect.Parameter(p.name, inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                           default=(inspect.Parameter.empty if defaults[p.name] is REQUIRED
+                                    else defaults[p.name])) for p in params]
+        + [inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d) for n, d in extra])
+    base_cls = ProgramEdf if signature.kind == "edf" else ProgramBsdf
+    title = f"df::{mdl_name}"
+
+    def __init__(self, *args, **kwargs):  # noqa: N807
+        try:
+            bound = pysig.bind(*args, **kwargs)
+        except TypeError as e:
+            raise ValueError(f"{title}: {e}") from None
+        bound.apply_defaults()
+        values = dict(bound.arguments)
+        for p in params:
+            if isinstance(p.default, str) and p.default in names and values[p.name] is None:
+                values[p.name] = values[p.default]
+        for u in unsupported:
+            if np.any(np.asarray(values[u], dtype=np.float64) != np.asarray(
+                    defaults[u], dtype=np.float64)):
+                raise ValueError(f"{title}({u}) is not implemented yet; leave it at its "
+                                 f"default {defaults[u]!r}")
+        kids = []
+        for c in children:
+            child = values.pop(c)
+            if child is not None and not isinstance(child, base_cls):
+                raise ValueError(f"{title}({c}) must be a bound {signature.kind} (a "
+                                 f"render.df distribution function) or None for MDL's black "
+                                 f"{signature.kind}(), got {type(child).__name__}")
+            kids.append(child)
+        if is_layer:
+            program = layer_program(op, signature, values, kids[0], kids[1],
+                                    values.pop("normal"), values.pop("tangent_u"), title)
+        elif kids:
+            columns, flags = pack(signature, values, title)
+            program = combine(signature.kind, op, columns, flags,
+                              [None if c is None else c.program for c in kids])
+        else:
+            program = leaf_program(signature.kind, op, signature, values, Lobe.NONE, title,
+                                   albedo_table)
+            if isinstance(lobes, dict):
+                mode = str(getattr(values.get("mode"), "value", values.get("mode")))
+                mode = mode.removeprefix("::").removeprefix("df::")
+                leaf_lobes = lobes[mode]
+            else:
+                leaf_lobes = Lobe.NONE if lobes is None else lobes
+            program = Program(program.kind, program.code, program.kids, program.frames,
+                              program.P, program.tables, leaf_lobes)
+        base_cls.__init__(self, program)
+
+    doc = (f"``{title}`` over lanes: its kernels, run by :mod:`render.interpreter`.\n\n"
+           f"Parameters (MDL's, constants or one value per lane): "
+           f"{', '.join(names)}" + (f"; renderer context: {', '.join(n for n, _ in extra)}"
+                                     if extra else "") + ".")
+    cls = type(py_name, (base_cls,), {"__init__": __init__, "__doc__": doc,
+                                      "__module__": module, "mdl_name": mdl_name})
+    cls.__signature__ = pysig
+    return cls

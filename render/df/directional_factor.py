@@ -77,6 +77,21 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
             f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
 
 
+@njit
+def curve_constant(P, row, b, flags):
+    """Whether the curve takes one value at every cosine (no F82 tint, and ``R0 = R90``
+    or exponent 0): then the albedo is exact without quadrature."""
+    for c in range(3):
+        if P[row, b + _F82 + c] != 1.0:
+            return False
+    if P[row, b + _EXPONENT] == 0.0:
+        return True
+    for c in range(3):
+        if P[row, b + _R0 + c] != P[row, b + _R90 + c]:
+            return False
+    return True
+
+
 class DirectionalFactor(ScaledBsdf):
     """``df::directional_factor`` over lanes (eval, pdf and sampling: :class:`ScaledBsdf`).
 
