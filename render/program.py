@@ -200,12 +200,14 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
         value = values.get(p.name, p.default)
         if value is REQUIRED or isinstance(value, str) or value is None:
             raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
+        if p.type == "float3x3":  # row-major, M[i][j] at slot 3 i + j
+            value = np.asarray(value, dtype=np.float64).reshape(-1, 9)
         a = _as_rows(value, p.width, f"{name}({p.name})")
         if p.clamp is not None:
             a = np.clip(a, p.clamp[0], p.clamp[1])
         cols.append(a)
     for c in signature.context:
-        a = _as_rows(values.get(c, 1.0), 1, f"{name}({c})")
+        a = _as_rows(values.get(c, _CONTEXT_DEFAULTS.get(c, 1.0)), 1, f"{name}({c})")
         if c.startswith("ior") and np.any(a <= 0.0):
             raise ValueError(f"{name}: {c} must be > 0 (an index of refraction), got {a.min()}")
         cols.append(a)
@@ -652,7 +654,8 @@ _CONTEXT_DEFAULTS = {"ior_outside": 1.0, "ior_inside": 1.0, "thin_walled": False
 
 
 def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=None,
-             unsupported: tuple = (), albedo_table=None, module: str = "render.df") -> type:
+             unsupported: tuple = (), albedo_table=None, check=None,
+             module: str = "render.df") -> type:
     """The Python class of a df: MDL's parameters (from ``signature``) as keywords or in
     MDL's order, plus the renderer context the kernels read; instances are
     :class:`ProgramBsdf` (or :class:`ProgramEdf`) whose program is the df.
@@ -662,6 +665,9 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
     both in the inherited local frame.  ``lobes``: a :class:`Lobe` or a dict from the
     scatter mode's name to the lobes of an elemental df.  ``unsupported``: parameters
     that must stay at their defaults.  ``albedo_table``: see :func:`leaf_program`.
+    ``check(values)`` raises ValueError for arguments MDL does not allow.  A 3x3
+    context (``object_to_local``, packed as 9 slots ``object_to_local_ij``) is taken as
+    one ``(3, 3)`` or ``(rows, 3, 3)`` argument.
     """
     import inspect
 
@@ -672,8 +678,11 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
     extra = []
     if is_layer:
         extra.append(("tangent_u", (1.0, 0.0, 0.0)))
+    matrices = sorted({c[:-3] for c in signature.context if c[-3:-2] == "_" and c[-2:].isdigit()})
     if signature.context:
-        extra += [(c, _CONTEXT_DEFAULTS.get(c)) for c in signature.context]
+        extra += [(c, _CONTEXT_DEFAULTS.get(c)) for c in signature.context
+                  if c[:-3] not in matrices]
+        extra += [(m, np.eye(3)) for m in matrices]
         extra.append(("thin_walled", False))
     defaults = {}
     for p in params:
@@ -703,6 +712,13 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
         for p in params:
             if isinstance(p.default, str) and p.default in names and values[p.name] is None:
                 values[p.name] = values[p.default]
+        for m in matrices:
+            a = np.asarray(values.pop(m), dtype=np.float64).reshape(-1, 3, 3)
+            for i in range(3):
+                for j in range(3):
+                    values[f"{m}_{i}{j}"] = a[:, i, j]
+        if check is not None:
+            check(values)
         for u in unsupported:
             if np.any(np.asarray(values[u], dtype=np.float64) != np.asarray(
                     defaults[u], dtype=np.float64)):

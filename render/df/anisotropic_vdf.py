@@ -42,14 +42,23 @@ import math
 
 import numpy as np
 
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
-from render.bsdf import Bsdf, BsdfSample, Lobe, check_dirs, check_samples, lane_float, lanes
+from render._typing import Arr, ArrayLike, Vec3
+from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._signature import Param, Signature
-from render.frame import Frame
 from render.jit import njit
+from render.program import O_ANISOTROPIC_VDF, df_class
 
-__all__ = ["AnisotropicVdf", "anisotropic_vdf", "G_MAX", "hg_phase"]
+__all__ = [
+    "AnisotropicVdf",
+    "anisotropic_vdf",
+    "G_MAX",
+    "hg_phase",
+    "SIGNATURE",
+    "eval_pdf",
+    "sample",
+    "albedo",
+]
 
 #: largest ``|directional_bias|`` used (values up to 1 are accepted and clamped to it)
 G_MAX = 1.0 - 1e-4
@@ -135,28 +144,23 @@ def albedo(P, row, b, flags, wox, woy, woz):
     return 1.0, 1.0, 1.0
 
 
-# --- the numpy reference (deleted once the program adapters replace it) ----------------
+# --- the Python class ------------------------------------------------------------------
 
 
-def _bias(value: ArrayLike) -> np.ndarray:
-    g = lane_float(value, "directional_bias")
-    if np.any(np.abs(g) > 1.0):
-        raise ValueError(
-            f"directional_bias must lie in [-1, 1] (-1 backward, 0 isotropic, 1 forward), "
-            f"got {value!r}"
-        )
-    return np.clip(g, -G_MAX, G_MAX)
+def _check(values: dict) -> None:
+    g = np.asarray(values["directional_bias"], dtype=np.float64)
+    if not np.all(np.isfinite(g)) or np.any(np.abs(g) > 1.0):
+        raise ValueError(f"directional_bias must be in [-1, 1], got {values['directional_bias']!r}")
+
+
+AnisotropicVdf = df_class("AnisotropicVdf", "anisotropic_vdf", O_ANISOTROPIC_VDF, SIGNATURE,
+                          Lobe.DIFFUSE, check=_check)
+anisotropic_vdf = AnisotropicVdf
 
 
 def hg_phase(g: ArrayLike, wo: Vec3, wi: Vec3) -> Arr:
-    """The Henyey–Greenstein phase function ``p(wo, wi)`` (per steradian), (n,).
-
-    Parameters
-    ----------
-    g : float or (n,)
-        Asymmetry in ``[-G_MAX, G_MAX]`` (already clamped).
-    wo, wi : (n, 3) float64
-        Unit directions: ``wo`` toward the previous vertex, ``wi`` toward the next.
+    """The Henyey–Greenstein phase function ``p(wo, wi)`` (per steradian), (n,): the
+    :func:`eval_pdf` kernel's pdf.
 
     Examples
     --------
@@ -166,103 +170,4 @@ def hg_phase(g: ArrayLike, wo: Vec3, wi: Vec3) -> Arr:
     >>> np.round(p, 12).tolist()                  # (1 - g^2) / (1 -+ g)^3
     [6.0, 0.222222222222]
     """
-    g = np.asarray(g, dtype=np.float64)
-    gp = np.maximum(g, 0.0)
-    gn = np.minimum(g, 0.0)
-    s_fwd = wo + wi  # |s|^2 = 2 (1 - cos theta) with cos theta = -wo . wi
-    s_bwd = wo - wi  # |s|^2 = 2 (1 + cos theta)
-    denom = np.where(
-        g >= 0.0,
-        (1.0 - gp) ** 2 + gp * np.einsum("ij,ij->i", s_fwd, s_fwd),
-        (1.0 + gn) ** 2 - gn * np.einsum("ij,ij->i", s_bwd, s_bwd),
-    )
-    # denom >= (1 - |g|)^2 >= 1e-8 > 0 for unit directions
-    return (1.0 - g * g) * _INV_4PI / (denom * np.sqrt(denom))
-
-
-class AnisotropicVdf(Bsdf):
-    """``df::anisotropic_vdf`` over lanes (a phase function with the Bsdf interface).
-
-    Parameters
-    ----------
-    directional_bias : float or (n,)
-        Henyey–Greenstein ``g`` in [-1, 1]; clamped to ``[-G_MAX, G_MAX]``.
-
-    Raises
-    ------
-    ValueError
-        ``|directional_bias| > 1`` or non-finite.
-
-    Examples
-    --------
-    >>> vdf = anisotropic_vdf(directional_bias=0.0)
-    >>> wo = np.array([[0.0, 0.0, 1.0]])
-    >>> round(float(vdf.pdf(wo, np.array([[1.0, 0.0, 0.0]]))[0] * 4 * np.pi), 12)
-    1.0
-    >>> s = anisotropic_vdf(-0.9).sample(wo, np.array([0.5]), np.array([[0.5, 0.3]]))
-    >>> bool(s.wi[0, 2] > 0.9), Lobe(int(s.lobe[0])).name    # strongly backward
-    (True, 'DIFFUSE_REFLECTION')
-    """
-
-    lobes = Lobe.DIFFUSE
-
-    def __init__(self, directional_bias: ArrayLike = 0.0):
-        self.directional_bias = _bias(directional_bias)
-
-    def __repr__(self) -> str:
-        return f"anisotropic_vdf(directional_bias={self.directional_bias.tolist()})"
-
-    def _g(self, n: int) -> np.ndarray:
-        return lanes(self.directional_bias, n, "directional_bias")
-
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
-        wo, wi = check_dirs(wo, wi)
-        p = hg_phase(self._g(len(wo)), wo, wi)
-        return np.repeat(p[:, None], 3, axis=1)
-
-    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        wo, wi = check_dirs(wo, wi)
-        return hg_phase(self._g(len(wo)), wo, wi)
-
-    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
-        wo, wi = check_dirs(wo, wi)
-        p = hg_phase(self._g(len(wo)), wo, wi)
-        return np.repeat(p[:, None], 3, axis=1), p
-
-    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        u1, u2 = check_samples(n, u1, u2)
-        g = np.broadcast_to(self._g(n), (n,))
-        a = 2.0 * u2[:, 0] - 1.0
-        den = 1.0 + g * a  # >= 1 - G_MAX > 0
-        cos_t = (a + 0.5 * g * (a * a + 3.0) + g * g * a + 0.5 * g**3 * (a * a - 1.0)) / (den * den)
-        cos_t = np.clip(cos_t, -1.0, 1.0)
-        sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
-        phi = 2.0 * np.pi * u2[:, 1]
-        # a frame about the propagation direction -wo (rows of wo are unit)
-        f = Frame.from_normal(-wo)
-        wi = (
-            (sin_t * np.cos(phi))[:, None] * f.s
-            + (sin_t * np.sin(phi))[:, None] * f.t
-            + cos_t[:, None] * f.n
-        )
-        length = np.linalg.norm(wi, axis=1)
-        ok = length > 0.5  # a unit ``wo`` gives a unit ``wi``; a zero ``wo`` fails
-        wi = np.where(ok[:, None], wi / np.where(ok, length, 1.0)[:, None], 0.0)
-        pdf = np.where(ok, hg_phase(g, wo, wi), 0.0)
-        back = np.einsum("ij,ij->i", wi, wo) > 0.0
-        lobe = np.where(back, int(Lobe.DIFFUSE_REFLECTION), int(Lobe.DIFFUSE_TRANSMISSION))
-        return BsdfSample(
-            wi,
-            pdf,
-            np.where(ok[:, None], 1.0, np.zeros((n, 3))),
-            np.where(ok, lobe, 0).astype(np.int32),
-        ).checked()
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        return np.ones((len(wo), 3))
-
-
-anisotropic_vdf = AnisotropicVdf
+    return AnisotropicVdf(g).pdf(wo, wi)

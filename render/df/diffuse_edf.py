@@ -15,18 +15,19 @@ weight 1.  Only ``+z`` emits (the integrator orients the frame toward the emitti
 
 from __future__ import annotations
 
-import numpy as np
-
-from render._typing import Arr, Arr2, Rgb, Vec3
-from render.bsdf import Edf, EdfSample, check_dirs, check_samples
 from render.df import _kernel_common as kc
 from render.df._common import INV_PI
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.numerics import TOL
-from render.warp import square_to_cosine_hemisphere
+from render.program import O_DIFFUSE_EDF, df_class
 
-__all__ = ["DiffuseEdf", "diffuse_edf"]
+__all__ = [
+    "DiffuseEdf",
+    "diffuse_edf",
+    "SIGNATURE",
+    "edf_eval_pdf",
+    "edf_sample",
+]
 
 
 # --- signature and kernels (the compiled render core) ---------------------------------
@@ -53,39 +54,7 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
     return x, y, z, z * INV_PI, 1.0, 1.0, 1.0
 
 
-# --- the numpy reference (deleted once the program adapters replace it) ----------------
+# --- the Python class ------------------------------------------------------------------
 
-
-class DiffuseEdf(Edf):
-    """``df::diffuse_edf`` over lanes.
-
-    Examples
-    --------
-    >>> e = diffuse_edf()
-    >>> (e.eval(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]])) * np.pi).tolist()
-    [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]
-    """
-
-    def __repr__(self) -> str:
-        return "diffuse_edf()"
-
-    def eval(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        return np.repeat(np.where(wo[:, 2] > TOL.cos_zero, INV_PI, 0.0)[:, None], 3, axis=1)
-
-    def pdf(self, wo: Vec3) -> Arr:
-        (wo,) = check_dirs(wo, names=("wo",))
-        return np.where(wo[:, 2] > TOL.cos_zero, wo[:, 2] * INV_PI, 0.0)
-
-    def sample(self, u1: Arr, u2: Arr2) -> EdfSample:
-        u1, u2 = check_samples(len(np.asarray(u2)), u1, u2)
-        wo = square_to_cosine_hemisphere(u2)
-        ok = wo[:, 2] > TOL.cos_zero
-        return EdfSample(
-            np.where(ok[:, None], wo, 0.0),
-            np.where(ok, wo[:, 2] * INV_PI, 0.0),
-            np.repeat(ok.astype(np.float64)[:, None], 3, axis=1),
-        )
-
-
+DiffuseEdf = df_class("DiffuseEdf", "diffuse_edf", O_DIFFUSE_EDF, SIGNATURE)
 diffuse_edf = DiffuseEdf

@@ -33,26 +33,25 @@ import math
 
 import numpy as np
 
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
+from render._typing import Arr, ArrayLike
 from render.bsdf import (
-    Bsdf,
-    BsdfSample,
     Lobe,
-    check_dirs,
-    check_samples,
-    lane_color,
-    lane_float,
-    lanes,
 )
 from render.df import _kernel_common as kc
-from render.df._common import INV_PI, orient
+from render.df._common import INV_PI
 from render.df._signature import Param, Signature
-from render.frame import mirror_z
 from render.jit import njit
-from render.numerics import TOL, check_finite, dot, safe_sqrt, saturate
-from render.warp import square_to_cosine_hemisphere
+from render.program import O_DIFFUSE_REFLECTION, df_class
 
-__all__ = ["DiffuseReflectionBsdf", "diffuse_reflection_bsdf", "oren_nayar_albedo"]
+__all__ = [
+    "DiffuseReflectionBsdf",
+    "diffuse_reflection_bsdf",
+    "oren_nayar_albedo",
+    "SIGNATURE",
+    "eval_pdf",
+    "sample",
+    "albedo",
+]
 
 #: ``1 - A = C_A sigma A``
 _C_A = 0.5 - 2.0 / (3.0 * np.pi)
@@ -165,159 +164,25 @@ def albedo(P, row, b, flags, wox, woy, woz):
     return rho * t0 + omr * m0, rho * t1 + omr * m1, rho * t2 + omr * m2
 
 
-# --- the numpy reference (deleted once the program adapters replace it) ----------------
+# --- the Python class ------------------------------------------------------------------
+
+DiffuseReflectionBsdf = df_class("DiffuseReflectionBsdf", "diffuse_reflection_bsdf",
+                                 O_DIFFUSE_REFLECTION, SIGNATURE, Lobe.DIFFUSE_REFLECTION)
+diffuse_reflection_bsdf = DiffuseReflectionBsdf
 
 
-def _g(mu: Arr) -> Arr:
-    """``G(theta)`` of the closed-form albedo, ``rho = A + B G / pi``; exact at mu -> 0.
-
-    ``G = sin t (t - sin t cos t) + 2/3 tan t (1 - sin^3 t - cos t)``, with the last factor
-    rewritten as ``mu (mu (1 + s + s^2)/(1 + s) - 1)`` (``s = sin t``) so that the
-    ``tan t`` pole cancels analytically.
-    """
-    mu = np.clip(mu, 0.0, 1.0)
-    s = safe_sqrt(1.0 - mu * mu)
-    theta = np.arctan2(s, mu)
-    return s * (theta - s * mu) + (2.0 / 3.0) * s * (mu * (1.0 + s + s * s) / (1.0 + s) - 1.0)
-
-
-def oren_nayar_albedo(mu: ArrayLike, roughness: ArrayLike) -> Arr:
-    """Directional albedo ``rho(mu)`` of the white single-scattering Oren–Nayar lobe.
-
-    Parameters
-    ----------
-    mu : (n,) float64
-        ``cos theta_o`` in [0, 1].
-    roughness : float or (n,) float64
-        Saturated to [0, 1].
-
-    Returns
-    -------
-    (n,) float64
-        ``A + B G(theta) / pi``; 1 at roughness 0 and at grazing incidence.
+def oren_nayar_albedo(mu: ArrayLike, roughness: float) -> Arr:
+    """Directional albedo ``rho(mu)`` of the white single-scattering Oren–Nayar lobe
+    (the :func:`albedo` kernel at ``wo.z = mu``).
 
     Examples
     --------
     >>> np.round(oren_nayar_albedo(np.array([1.0, 0.5, 0.0]), 1.0), 4).tolist()
     [0.7765, 0.8653, 1.0]
     """
-    sigma = saturate(roughness)
-    a = 1.0 / (1.0 + _C_A * sigma)
-    return a + sigma * a * _g(np.asarray(mu, dtype=np.float64)) / np.pi
-
-
-class DiffuseReflectionBsdf(Bsdf):
-    """``df::diffuse_reflection_bsdf`` over lanes (see the module docstring).
-
-    Parameters
-    ----------
-    tint : float, (3,) or (n, 3)
-        Saturated to [0, 1].
-    roughness : float or (n,)
-        Oren–Nayar ``sigma``, saturated to [0, 1]; 0 is Lambert.
-    multiscatter_tint : float, (3,) or (n, 3)
-        Energy-compensation tint (MDL 1.10), saturated; 0 disables the compensation.
-
-    Examples
-    --------
-    >>> bsdf = diffuse_reflection_bsdf(tint=0.5)
-    >>> wo = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
-    >>> wi = np.array([[0.6, 0.0, 0.8], [0.6, 0.0, -0.8]])
-    >>> np.round(bsdf.eval(wo, wi) * np.pi, 6).tolist()
-    [[0.4, 0.4, 0.4], [0.0, 0.0, 0.0]]
-    """
-
-    lobes = Lobe.DIFFUSE_REFLECTION
-
-    def __init__(
-        self, tint: ArrayLike = 1.0, roughness: ArrayLike = 0.0, multiscatter_tint: ArrayLike = 0.0
-    ):
-        self.tint = saturate(lane_color(tint, "tint"))
-        self.roughness = saturate(lane_float(roughness, "roughness"))
-        self.multiscatter_tint = saturate(lane_color(multiscatter_tint, "multiscatter_tint"))
-        self._black = np.all(self.tint == 0, axis=1) & np.all(self.multiscatter_tint == 0, axis=1)
-        # terms that are exactly 0 and skipped: roughness 0 (A = 1, B = 0) is Lambert, and
-        # multiscatter_tint 0 needs no energy compensation
-        self._rough = bool(np.any(self.roughness > 0))
-        self._compensated = bool(np.any(self.multiscatter_tint > 0))
-
-    def __repr__(self) -> str:
-        return (
-            f"diffuse_reflection_bsdf(tint={self.tint.tolist()}, "
-            f"roughness={self.roughness.tolist()}, "
-            f"multiscatter_tint={self.multiscatter_tint.tolist()})"
-        )
-
-    def _params(self, n: int):
-        return (
-            lanes(self.tint, n, "tint"),
-            np.broadcast_to(lanes(self.roughness, n, "roughness"), (n,)),
-            lanes(self.multiscatter_tint, n, "multiscatter_tint"),
-            np.broadcast_to(lanes(self._black, n, "tint"), (n,)),
-        )
-
-    def _value(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, np.ndarray]:
-        """``eval / pdf`` (the sample weight) for oriented ``wo``, and validity."""
-        n = len(wo)
-        tint, sigma, ms_tint, black = self._params(n)
-        mu1, mu2 = wo[:, 2], wi[:, 2]
-        valid = (mu1 > TOL.cos_zero) & (mu2 > TOL.cos_zero) & ~black
-        if not self._rough:
-            return np.where(valid[:, None], tint, 0.0), valid  # Lambert
-        # Fujii's Oren–Nayar: s / t with t = max(mu1, mu2) where s > 0
-        a = 1.0 / (1.0 + _C_A * sigma)
-        b = sigma * a
-        # s = sin t1 sin t2 cos(dphi) >= -1; rounding can give -1 - ulp at grazing opposite
-        # azimuths, and A + B s < 0 with it at sigma = 1 (A = B)
-        s = np.maximum(dot(wo, wi) - mu1 * mu2, -1.0)
-        tmax = np.maximum(np.maximum(mu1, mu2), TOL.cos_zero)
-        s = np.where(s > 0.0, s / tmax, s)
-        value = (a + b * s)[:, None] * tint
-        if self._compensated:
-            # energy compensation: 1 - rho(mu) = B (C_A - G(mu)/pi), no cancellation at small sigma
-            e1 = _C_A - _g(mu1) / np.pi
-            e2 = _C_A - _g(mu2) / np.pi
-            value = value + (
-                b * np.maximum(e1, 0.0) * np.maximum(e2, 0.0) / (_C_A - _C_AVG)
-            )[:, None] * ms_tint
-        return np.where(valid[:, None], value, 0.0), valid
-
-    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
-        wo, wi = check_dirs(wo, wi)
-        _, wo, wi = orient(wo, wi)
-        value, valid = self._value(wo, wi)
-        pdf = np.where(valid, wi[:, 2] * INV_PI, 0.0)
-        return check_finite(
-            "diffuse_reflection_bsdf.eval", value * pdf[:, None], nonnegative=True
-        ), pdf
-
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
-        return self.eval_pdf(wo, wi)[0]
-
-    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        return self.eval_pdf(wo, wi)[1]
-
-    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
-        u1, u2 = check_samples(len(wo), u1, u2)
-        flip, wo = orient(wo)
-        wi = square_to_cosine_hemisphere(u2)
-        value, valid = self._value(wo, wi)
-        wi = np.where(valid[:, None], mirror_z(wi, flip), 0.0)
-        pdf = np.where(valid, wi[:, 2] * np.where(flip, -1.0, 1.0) * INV_PI, 0.0)
-        lobe = np.where(valid, int(Lobe.DIFFUSE_REFLECTION), 0).astype(np.int32)
-        return BsdfSample(wi, pdf, value, lobe).checked()
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        tint, sigma, ms_tint, black = self._params(n)
-        mu = np.abs(wo[:, 2])
-        rho = oren_nayar_albedo(mu, sigma)
-        a = 1.0 / (1.0 + _C_A * sigma)
-        one_minus_rho = sigma * a * np.maximum(_C_A - _g(mu) / np.pi, 0.0)
-        out = rho[:, None] * tint + one_minus_rho[:, None] * ms_tint
-        return np.where(((mu > TOL.cos_zero) & ~black)[:, None], out, 0.0)
-
-
-diffuse_reflection_bsdf = DiffuseReflectionBsdf
+    mu = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0)
+    wo = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=1)
+    # the closed form's limit at grazing incidence (the kernel returns 0 there)
+    a = DiffuseReflectionBsdf(tint=1.0, roughness=roughness).albedo(
+        np.where((mu > 0.0)[:, None], wo, [[0.0, 0.0, 1.0]]))[:, 0]
+    return np.where(mu > 0.0, a, 1.0)

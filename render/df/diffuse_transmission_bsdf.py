@@ -12,19 +12,21 @@ Departure: the bump renormalisation ``1/(pi/2 (1 + n.ng))`` is left to the integ
 
 from __future__ import annotations
 
-import numpy as np
-
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
-from render.bsdf import Bsdf, BsdfSample, Lobe, check_dirs, check_samples, lane_color, lanes
+from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._common import INV_PI, orient
+from render.df._common import INV_PI
 from render.df._signature import Param, Signature
-from render.frame import mirror_z
 from render.jit import njit
-from render.numerics import TOL, saturate
-from render.warp import square_to_cosine_hemisphere
+from render.program import O_DIFFUSE_TRANSMISSION, df_class
 
-__all__ = ["DiffuseTransmissionBsdf", "diffuse_transmission_bsdf"]
+__all__ = [
+    "DiffuseTransmissionBsdf",
+    "diffuse_transmission_bsdf",
+    "SIGNATURE",
+    "eval_pdf",
+    "sample",
+    "albedo",
+]
 
 
 # --- signature and kernels (the compiled render core) ---------------------------------
@@ -70,71 +72,8 @@ def albedo(P, row, b, flags, wox, woy, woz):
     return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
 
 
-# --- the numpy reference (deleted once the program adapters replace it) ----------------
+# --- the Python class ------------------------------------------------------------------
 
-
-class DiffuseTransmissionBsdf(Bsdf):
-    """``df::diffuse_transmission_bsdf`` over lanes.
-
-    Parameters
-    ----------
-    tint : float, (3,) or (n, 3)
-        Saturated to [0, 1].
-
-    Examples
-    --------
-    >>> bsdf = diffuse_transmission_bsdf(tint=[1.0, 0.5, 0.0])
-    >>> wo = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
-    >>> wi = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]])
-    >>> (bsdf.eval(wo, wi) * np.pi).tolist()
-    [[1.0, 0.5, 0.0], [0.0, 0.0, 0.0]]
-    """
-
-    lobes = Lobe.DIFFUSE_TRANSMISSION
-
-    def __init__(self, tint: ArrayLike = 1.0):
-        self.tint = saturate(lane_color(tint, "tint"))
-        self._black = np.all(self.tint == 0, axis=1)
-
-    def __repr__(self) -> str:
-        return f"diffuse_transmission_bsdf(tint={self.tint.tolist()})"
-
-    def _valid(self, wo: Vec3, wi: Vec3) -> np.ndarray:
-        n = len(wo)
-        black = np.broadcast_to(lanes(self._black, n, "tint"), (n,))
-        return (wo[:, 2] > TOL.cos_zero) & (wi[:, 2] < -TOL.cos_zero) & ~black
-
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
-        wo, wi = check_dirs(wo, wi)
-        _, wo, wi = orient(wo, wi)
-        valid = self._valid(wo, wi)
-        return np.where(
-            valid[:, None], lanes(self.tint, len(wo), "tint") * (-wi[:, 2] * INV_PI)[:, None], 0.0
-        )
-
-    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        wo, wi = check_dirs(wo, wi)
-        _, wo, wi = orient(wo, wi)
-        return np.where(self._valid(wo, wi), -wi[:, 2] * INV_PI, 0.0)
-
-    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
-        u1, u2 = check_samples(len(wo), u1, u2)
-        flip, wo = orient(wo)
-        wi = mirror_z(square_to_cosine_hemisphere(u2))
-        valid = self._valid(wo, wi)
-        pdf = np.where(valid, -wi[:, 2] * INV_PI, 0.0)
-        weight = np.where(valid[:, None], lanes(self.tint, len(wo), "tint"), 0.0)
-        wi = np.where(valid[:, None], mirror_z(wi, flip), 0.0)
-        lobe = np.where(valid, int(Lobe.DIFFUSE_TRANSMISSION), 0).astype(np.int32)
-        return BsdfSample(wi, pdf, weight, lobe).checked()
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        ok = np.abs(wo[:, 2]) > TOL.cos_zero
-        return np.where(
-            ok[:, None], np.broadcast_to(lanes(self.tint, len(wo), "tint"), (len(wo), 3)), 0.0
-        )
-
-
+DiffuseTransmissionBsdf = df_class("DiffuseTransmissionBsdf", "diffuse_transmission_bsdf",
+                                   O_DIFFUSE_TRANSMISSION, SIGNATURE, Lobe.DIFFUSE_TRANSMISSION)
 diffuse_transmission_bsdf = DiffuseTransmissionBsdf

@@ -32,15 +32,19 @@ import math
 
 import numpy as np
 
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
-from render.bsdf import Edf, EdfSample, check_dirs, check_samples
 from render.df import _kernel_common as kc
 from render.df._signature import Param, Signature
-from render.frame import Frame
 from render.jit import njit
-from render.numerics import TOL, dot, unitize
+from render.numerics import TOL
+from render.program import O_SPOT_EDF, df_class
 
-__all__ = ["SpotEdf", "spot_edf"]
+__all__ = [
+    "SpotEdf",
+    "spot_edf",
+    "SIGNATURE",
+    "edf_eval_pdf",
+    "edf_sample",
+]
 
 _IDENTITY = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
@@ -162,122 +166,7 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
     return wox, woy, woz, pdf, w, w, w
 
 
-# --- the numpy reference (deleted once the program adapters replace it) ----------------
+# --- the Python class ------------------------------------------------------------------
 
-
-class SpotEdf(Edf):
-    """``df::spot_edf`` over lanes.
-
-    Parameters
-    ----------
-    exponent : float
-        Cosine power ``k`` (negative values act as 0).
-    spread : float
-        Full opening angle in radians, clamped to ``[TOL.spread_min, pi]``.
-    global_distribution : bool
-        Fix the axis in object space (MDL's default) instead of along the normal.
-    global_frame : (3, 3) float64
-        Maps distribution-frame vectors to object space (``M @ v``); the axis is
-        ``M @ (0, 0, 1)``.
-    object_to_local : (3, 3) or (n, 3, 3) float64, optional
-        Rotation from object space into each lane's local shading frame, which the
-        renderer knows.  Required when ``global_distribution`` is true.
-
-    Examples
-    --------
-    >>> e = spot_edf(exponent=0.0, spread=np.pi, global_distribution=False)
-    >>> bool(np.allclose(e.eval(np.array([[0.0, 0.6, 0.8]])), 1 / np.pi))
-    True
-    >>> spot_edf(exponent=2.0)
-    Traceback (most recent call last):
-    ...
-    ValueError: spot_edf(global_distribution=True) needs object_to_local: ...
-    """
-
-    def __init__(
-        self,
-        exponent: float,
-        spread: float = np.pi,
-        global_distribution: bool = True,
-        global_frame: ArrayLike = _IDENTITY,
-        object_to_local: ArrayLike | None = None,
-    ):
-        if not (np.isfinite(exponent) and np.isfinite(spread)):
-            raise ValueError(
-                f"spot_edf needs a finite exponent and spread, got {exponent!r}, {spread!r}"
-            )
-        self.exponent = max(float(exponent), 0.0)
-        self.spread = float(np.clip(spread, TOL.spread_min, np.pi))
-        self.global_distribution = bool(global_distribution)
-        # s = cos(spread/2); 1 - s = 2 sin^2(spread/4) without cancellation
-        self.cos_spread = float(np.cos(0.5 * self.spread))
-        self.one_minus_s = float(2.0 * np.sin(0.25 * self.spread) ** 2)
-        k, s = self.exponent, self.cos_spread
-        self._norm_eval = (k + 1.0) * (k + 2.0) / (2.0 * np.pi * self.one_minus_s * (k + 1.0 + s))
-        self._norm_pdf = (k + 1.0) / (2.0 * np.pi * self.one_minus_s)
-        if self.global_distribution:
-            if object_to_local is None:
-                raise ValueError(
-                    "spot_edf(global_distribution=True) needs object_to_local: the rotation "
-                    "from object space into the local shading frame (or pass "
-                    "global_distribution=False)"
-                )
-            gf = np.asarray(global_frame, dtype=np.float64)
-            o2l = np.asarray(object_to_local, dtype=np.float64)
-            if gf.shape != (3, 3) or o2l.shape[-2:] != (3, 3) or o2l.ndim not in (2, 3):
-                raise ValueError(
-                    f"global_frame must be (3, 3) and object_to_local (3, 3) or (n, 3, 3); "
-                    f"got {gf.shape} and {o2l.shape}"
-                )
-            axis, ok = unitize((o2l @ gf[:, 2]).reshape(-1, 3))
-            if not np.all(ok):
-                raise ValueError("spot_edf: global_frame maps +z to a zero vector")
-            self.axis = axis
-        else:
-            self.axis = np.array([[0.0, 0.0, 1.0]])
-
-    def __repr__(self) -> str:
-        return (
-            f"spot_edf(exponent={self.exponent}, spread={self.spread}, "
-            f"global_distribution={self.global_distribution})"
-        )
-
-    def _t(self, wo: Vec3) -> tuple[Arr, np.ndarray]:
-        """``t = (c - s)/(1 - s)`` (``1 - c`` from ``|wo - axis|^2 / 2``) and the emitting mask."""
-        axis = np.broadcast_to(self.axis, wo.shape)
-        one_minus_c = 0.5 * dot(wo - axis, wo - axis)
-        t = 1.0 - one_minus_c / self.one_minus_s
-        return np.maximum(t, 0.0), (t > 0.0) & (wo[:, 2] > TOL.cos_zero)
-
-    def eval(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        t, ok = self._t(wo)
-        v = np.where(ok, self._norm_eval * t**self.exponent, 0.0)
-        return np.repeat(v[:, None], 3, axis=1)
-
-    def pdf(self, wo: Vec3) -> Arr:
-        (wo,) = check_dirs(wo, names=("wo",))
-        t, ok = self._t(wo)
-        return np.where(ok, self._norm_pdf * t**self.exponent, 0.0)
-
-    def sample(self, u1: Arr, u2: Arr2) -> EdfSample:
-        n = len(np.asarray(u2))
-        u1, u2 = check_samples(n, u1, u2)
-        # t = (1 - u)^(1/(k+1)); 1 - cos = (1 - s)(1 - t)
-        t = np.exp(np.log1p(-u2[:, 1]) / (self.exponent + 1.0))
-        one_minus_c = self.one_minus_s * (1.0 - t)
-        c = 1.0 - one_minus_c
-        st = np.sqrt(np.maximum(one_minus_c * (2.0 - one_minus_c), 0.0))
-        phi = 2.0 * np.pi * u2[:, 0]
-        d = np.stack([st * np.cos(phi), st * np.sin(phi), c], axis=1)
-        axis = np.broadcast_to(self.axis, (n, 3))
-        wo = d if not self.global_distribution else Frame.from_normal(axis).to_world(d)
-        tt, ok = self._t(wo)
-        ok &= tt > 0.0
-        pdf = np.where(ok, self._norm_pdf * tt**self.exponent, 0.0)
-        ev = np.where(ok, self._norm_eval * tt**self.exponent, 0.0)
-        w = np.where(ok, ev * wo[:, 2] / np.where(ok, pdf, 1.0), 0.0)
-        return EdfSample(np.where(ok[:, None], wo, 0.0), pdf, np.repeat(w[:, None], 3, axis=1))
-
-
+SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE)
 spot_edf = SpotEdf
