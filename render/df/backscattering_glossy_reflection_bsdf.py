@@ -26,6 +26,11 @@ which is reciprocal and never gains energy (weight <= tint).  Reflection only, n
 Fresnel.  Departures: the exponent uses the exact ``log1p`` form (as in
 ``simple_glossy_bsdf``); ``multiscatter_tint`` is not implemented yet; ``albedo()`` is
 tabulated (``_albedo``).
+
+Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
+and :func:`albedo` (with the table arguments ``T, t`` of :func:`albedo_table`, as in
+``simple_glossy_bsdf``), bit for bit the numpy class's results
+(``tests/render/df/test_backscattering_glossy_reflection_bsdf_kernels.py``).
 """
 
 from __future__ import annotations

@@ -32,6 +32,13 @@ Departures from libbsdf:
 * ``multiscatter_tint`` is not implemented yet (``albedo()`` gives the single-scattering
   table that the compensation would need).
 
+Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
+and :func:`albedo` below, one lane at a time, bit for bit the numpy class's results
+(``tests/render/df/test_simple_glossy_bsdf_kernels.py``).  :func:`albedo` takes two
+arguments beyond the kernel contract, the program's table array ``T`` and this node's
+offset ``t`` in it, filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why
+the tables are not frozen into the kernel).
+
 References: Ashikhmin & Shirley, "An anisotropic Phong BRDF model" (2000); Heitz &
 d'Eon, "Importance sampling microfacet-based BSDFs using the distribution of visible
 normals" (2014).
