@@ -83,7 +83,12 @@ def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     from render.df._common import ScatterMode
     from render.df._signature import MODE_FLAGS
 
-    module = sys.modules[cls.__module__]
+    # the df's kernels: the module of the first class in the MRO that has them (a
+    # subclass of a df class defined elsewhere samples through its parent's kernels)
+    module = next(
+        m for m in (sys.modules.get(c.__module__) for c in cls.__mro__)
+        if hasattr(m, "sample_weights")
+    )
     sig = module.SIGNATURE
     P = np.zeros((1, sig.width))
     P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])

@@ -269,3 +269,15 @@ def test_checklist_pointwise_on_kernels(case, rng):
 @pytest.mark.parametrize(("case", "wo"), INTEGRALS, ids=pair_ids(INTEGRALS))
 def test_pdf_integral_furnace_and_albedo_on_kernels(case, wo):
     check_integrals(case, wo)
+
+
+def test_albedo_tables_of_a_subclass_use_the_parents_kernels(rng):
+    # the tables are built through the df module's kernels, also for subclasses defined
+    # elsewhere (tests count calls on such subclasses)
+    class Sub(simple_glossy_bsdf):
+        pass
+
+    wo = random_dirs(rng, 200)
+    a = Sub(roughness_u=0.45, mode=RT, ior_inside=1.3).albedo(wo)
+    b = simple_glossy_bsdf(roughness_u=0.45, mode=RT, ior_inside=1.3).albedo(wo)
+    assert np.array_equal(a, b) and np.all(a[wo[:, 2] > 1e-3] > 0)
