@@ -1,19 +1,24 @@
 """Compile time and ns per call of the glossy dfs' kernels (simple_glossy_bsdf and
 backscattering_glossy_reflection_bsdf), and the cost of one node's albedo table.
 
-Run from the repository root: ``python benchmarks/glossy_kernels.py``.  Cold compile:
-``PWC_CACHE_DIR=$(mktemp -d) python benchmarks/glossy_kernels.py``.
+Run from the repository root: ``python benchmarks/glossy_kernels.py`` (``--quick``: fewer
+calls).  Cold compile: ``PWC_CACHE_DIR=$(mktemp -d) python benchmarks/glossy_kernels.py``.
 """
 
 from __future__ import annotations
 
+import argparse
 import importlib
 import math
+import sys
 import time
+from pathlib import Path
 
 import numba
 import numpy as np
 
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
 t0 = time.perf_counter()
 G = importlib.import_module("render.df.simple_glossy_bsdf")
 B = importlib.import_module("render.df.backscattering_glossy_reflection_bsdf")
@@ -75,6 +80,9 @@ def _row(mod, **kw):
 
 
 def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="20k calls per kernel, not 2M")
+    n = 20_000 if ap.parse_args().quick else 2_000_000
     print(f"numba {numba.__version__}; import of both modules {t_import:.2f} s")
     # first calls compile (or load from the cache) the kernels themselves
     t = time.perf_counter()
@@ -90,7 +98,6 @@ def main():
     t = time.perf_counter()
     G.albedo_table(_row(G, ru=0.13, rv=0.41)[0], 0)
     print(f"node table, anisotropic, reflect (4 corners): {time.perf_counter() - t:.2f} s")
-    n = 2_000_000
     _bench_dirs(10)
     t = time.perf_counter()
     _bench_dirs(n)
