@@ -144,7 +144,7 @@ __all__ = [
     "LANE_SPREAD_MAX",
     "fresnel_curve",
     "fresnel_eta",
-    "f82_curve3",
+    "f82_curve1",
     "curve_geometry",
 ]
 
@@ -213,26 +213,13 @@ def fresnel_eta(ior, ior_outside, woz, flags):
 
 
 @njit
-def _f82_mix(t, g, s, r0, r90, f82):
-    """One channel of :func:`f82_curve` from its channel-free powers: ``t = (1 - c)^p``,
-    ``g = c (1 - c)^6``, ``s = (6/7)^p``."""
-    a = (r0 + (r90 - r0) * s) * _F82_NORM * (1.0 - f82)
-    return min(max(r0 + (r90 - r0) * t - a * g, 0.0), 1.0)
-
-
-@njit
-def f82_curve3(P, row, at_r0, at_r90, at_f82, p, c):
-    """:func:`f82_curve` at cosine ``c``, the three channels of the colours in slots
-    ``P[row, at_r0:at_r0 + 3]`` (``R0``), ``at_r90`` (``R90``), ``at_f82``, exponent ``p``
-    (read as ``max(p, 0)``): the powers, which do not depend on the channel, once."""
+def f82_curve1(c, r0, r90, f82, p):
+    """:func:`f82_curve` of one channel (``p`` read as ``max(p, 0)``)."""
     p = max(p, 0.0)
     cc = min(max(c, 0.0), 1.0)
-    t = math.pow(1.0 - cc, p)
-    g = cc * math.pow(1.0 - cc, 6.0)
-    s = math.pow(_SIX_SEVENTHS, p)
-    return (_f82_mix(t, g, s, P[row, at_r0], P[row, at_r90], P[row, at_f82]),
-            _f82_mix(t, g, s, P[row, at_r0 + 1], P[row, at_r90 + 1], P[row, at_f82 + 1]),
-            _f82_mix(t, g, s, P[row, at_r0 + 2], P[row, at_r90 + 2], P[row, at_f82 + 2]))
+    base = r0 + (r90 - r0) * math.pow(1.0 - cc, p)
+    a = (r0 + (r90 - r0) * math.pow(_SIX_SEVENTHS, p)) * _F82_NORM * (1.0 - f82)
+    return min(max(base - a * (cc * math.pow(1.0 - cc, 6.0)), 0.0), 1.0)
 
 
 @njit

@@ -45,7 +45,7 @@ import numpy as np
 
 from render._typing import Arr, ArrayLike, Rgb, Vec3
 from render.bsdf import lane_color, lane_float, lanes
-from render.df._layer import CurveLayer, curve_geometry, f82_curve, f82_curve3
+from render.df._layer import CurveLayer, curve_geometry, f82_curve, f82_curve1
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.numerics import saturate
@@ -106,7 +106,10 @@ _WEIGHT = COLOR_SIGNATURE.offset("weight")
 @njit
 def _curve3(P, row, b, c):
     """``C(c)`` per channel (the F82-tinted custom curve)."""
-    return f82_curve3(P, row, b + _R0, b + _R90, b + _F82, P[row, b + _EXPONENT], c)
+    p = P[row, b + _EXPONENT]
+    return (f82_curve1(c, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
+            f82_curve1(c, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
+            f82_curve1(c, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
 
 
 @njit
@@ -184,7 +187,7 @@ def curve_nk(P, row, b, flags, vx, vy, vz):
 def curve_constant(P, row, b, flags):
     """``C`` takes one value at every cosine: no F82 tint and ``R0 == R90`` or ``p == 0``
     (every channel)."""
-    p0 = max(P[row, b + _EXPONENT], 0.0) == 0.0  # as f82_curve3 reads p
+    p0 = max(P[row, b + _EXPONENT], 0.0) == 0.0  # as f82_curve1 reads p
     for k in range(3):
         if not (P[row, b + _F82 + k] == 1.0
                 and (P[row, b + _R0 + k] == P[row, b + _R90 + k] or p0)):

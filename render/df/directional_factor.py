@@ -29,7 +29,7 @@ from render._typing import ArrayLike, Rgb, Vec3
 from render.bsdf import Lobe, check_dirs, lane_color, lane_float, lanes
 from render.df import _kernel_common as kc
 from render.df._combine import albedo_correction, cheap_albedo, check_child, is_mirror
-from render.df._layer import f82_curve, f82_curve3
+from render.df._layer import f82_curve, f82_curve1
 from render.df._scaled import ScaledBsdf
 from render.df._signature import Param, Signature
 from render.frame import mirror_z
@@ -71,7 +71,10 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     kh = kc.dot3(wox, woy, oz, hx, hy, hz)
     if not kh >= 0.0:
         return 0.0, 0.0, 0.0
-    return f82_curve3(P, row, b + _R0, b + _R90, b + _F82, P[row, b + _EXPONENT], kh)
+    p = P[row, b + _EXPONENT]
+    return (f82_curve1(kh, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
+            f82_curve1(kh, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
+            f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
 
 
 class DirectionalFactor(ScaledBsdf):
