@@ -24,8 +24,10 @@ For the compiled render core, :func:`node_table` bakes one df node's roughness (
 into a short table (the columns above, interpolated in roughness, for ``wo`` on either
 side) and the kernel :func:`table_albedo` interpolates it in ``mu`` (and ``phi``), as
 :func:`glossy_albedo` does; the dfs' ``albedo`` kernels read it.  Tables are not built at
-import: a full grid over roughness (and IOR) costs minutes of sampling (see the kernels'
-tests and the report in ``docs``), while a node needs at most four columns.
+import and frozen into the kernels: one isotropic column costs about 0.3 s of sampling
+and one anisotropic corner 0.35 s (2 busy cores), so a full grid is ~10 s per (mode,
+IOR) isotropic and ~7 min anisotropic, and a refracting mode needs it per IOR; a node
+needs at most four columns (``benchmarks/glossy_kernels.py``).
 """
 
 from __future__ import annotations
@@ -76,24 +78,17 @@ def _mu_nodes(m: int) -> Arr:
     return np.maximum(np.linspace(0.0, 1.0, m) ** 2, MU_MIN)
 
 
-@njit
-def _weights(sample, P, flags, wo, pts):
-    """White sample weights (m, points) of the ``sample`` kernel for each row of ``wo``."""
-    m, k = wo.shape[0], pts.shape[0]
-    out = np.empty((m, k))
-    for i in range(m):
-        for j in range(k):
-            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
-                               pts[j, 1], pts[j, 2])[4]
-    return out
-
-
 def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     """Mean white sample weight for each row of ``wo`` (m, 3), through the df's kernels."""
     from render.df._common import ScatterMode
     from render.df._signature import MODE_FLAGS
 
-    module = sys.modules[cls.__module__]
+    # the df's kernels: the module of the first class in the MRO that has them (a
+    # subclass of a df class defined elsewhere samples through its parent's kernels)
+    module = next(
+        m for m in (sys.modules.get(c.__module__) for c in cls.__mro__)
+        if hasattr(m, "sample_weights")
+    )
     sig = module.SIGNATURE
     P = np.zeros((1, sig.width))
     P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
@@ -105,9 +100,8 @@ def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
         flags = MODE_FLAGS[ScatterMode.parse(mode).value]
         P[0, sig.offset("ior_outside")] = 1.0
         P[0, sig.offset("ior_inside")] = eta
-    return _weights(module.sample, P, flags, np.ascontiguousarray(wo), _kronecker(points)).mean(
-        axis=1
-    )
+    w = module.sample_weights(P, flags, np.ascontiguousarray(wo), _kronecker(points))
+    return w.mean(axis=1)
 
 
 @lru_cache(maxsize=None)

@@ -23,6 +23,11 @@ reflection; ``F`` / ``1 - F`` in ``scatter_reflect_transmit``)::
 Sampling draws ``h`` from ``D (n.h)``, applies the v-cavities flip (Heitz & d'Eon 2014),
 picks the event with probability ``P``, and reflects or refracts ``wo`` about ``h``.
 
+The same framework as scalar numba kernels (the render core): :func:`mf_geometry` and
+:func:`mf_finish` around the distribution's ``D`` for ``eval_pdf``, :func:`mf_sample_dir`
+from a sampled half vector for ``sample``; the df module composes them
+(``simple_glossy_bsdf.eval_pdf``).
+
 Departures from libbsdf, all deliberate:
 
 * the refraction pdf carries the Jacobian factor ``eta2^2`` that libbsdf omits (its

@@ -26,6 +26,11 @@ which is reciprocal and never gains energy (weight <= tint).  Reflection only, n
 Fresnel.  Departures: the exponent uses the exact ``log1p`` form (as in
 ``simple_glossy_bsdf``); ``multiscatter_tint`` is not implemented yet; ``albedo()`` is
 tabulated (``_albedo``).
+
+Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
+and :func:`albedo` (with the table arguments ``T, t`` of :func:`albedo_table`, as in
+``simple_glossy_bsdf``), bit for bit the numpy class's results
+(``tests/render/df/test_backscattering_glossy_reflection_bsdf_kernels.py``).
 """
 
 from __future__ import annotations
@@ -63,6 +68,7 @@ __all__ = [
     "sample",
     "albedo",
     "albedo_table",
+    "sample_weights",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -206,6 +212,19 @@ def _p_disk(x: Arr, y: Arr, e_u: Arr, e_v: Arr) -> Arr:
     norm = np.sqrt((e_u + 1.0) * (e_v + 1.0)) / np.pi
     return np.where(inside, norm * np.exp(expo), 0.0)
 
+
+@njit
+def sample_weights(P, flags, wo, pts):
+    """First-channel sample weights (m, k) of :func:`sample` on row 0 of ``P`` for each
+    ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
+    (:mod:`render.df._albedo`)."""
+    m, k = wo.shape[0], pts.shape[0]
+    out = np.empty((m, k))
+    for i in range(m):
+        for j in range(k):
+            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
+                               pts[j, 1], pts[j, 2])[4]
+    return out
 
 @njit
 def albedo(P, row, b, flags, wox, woy, woz, T, t):

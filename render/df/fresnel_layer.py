@@ -84,9 +84,11 @@ _IOR_INSIDE = COLOR_SIGNATURE.offset("ior_inside")
 def _curve3(P, row, b, flags, woz, c):
     """``F(c)`` per channel, with the IOR context of ``wo``'s side (``woz``)."""
     ior_o = P[row, b + _IOR_OUTSIDE]
-    f0 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR], ior_o, woz, flags))
-    f1 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR + 1], ior_o, woz, flags))
-    f2 = fresnel_curve(c, fresnel_eta(P[row, b + _IOR + 2], ior_o, woz, flags))
+    i0, i1, i2 = P[row, b + _IOR], P[row, b + _IOR + 1], P[row, b + _IOR + 2]
+    f0 = fresnel_curve(c, fresnel_eta(i0, ior_o, woz, flags))
+    # a grey ior (the float form, the common case) evaluates Fresnel once
+    f1 = f0 if i1 == i0 else fresnel_curve(c, fresnel_eta(i1, ior_o, woz, flags))
+    f2 = f0 if i2 == i0 else fresnel_curve(c, fresnel_eta(i2, ior_o, woz, flags))
     return f0, f1, f2
 
 

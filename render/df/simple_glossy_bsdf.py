@@ -32,6 +32,13 @@ Departures from libbsdf:
 * ``multiscatter_tint`` is not implemented yet (``albedo()`` gives the single-scattering
   table that the compensation would need).
 
+Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
+and :func:`albedo` below, one lane at a time, bit for bit the numpy class's results
+(``tests/render/df/test_simple_glossy_bsdf_kernels.py``).  :func:`albedo` takes two
+arguments beyond the kernel contract, the program's table array ``T`` and this node's
+offset ``t`` in it, filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why
+the tables are not frozen into the kernel).
+
 References: Ashikhmin & Shirley, "An anisotropic Phong BRDF model" (2000); Heitz &
 d'Eon, "Importance sampling microfacet-based BSDFs using the distribution of visible
 normals" (2014).
@@ -68,6 +75,7 @@ __all__ = [
     "sample",
     "albedo",
     "albedo_table",
+    "sample_weights",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -220,6 +228,19 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
         wiz = -wiz
     return wix, wiy, wiz, pdf, w0, w1, w2, lobe
 
+
+@njit
+def sample_weights(P, flags, wo, pts):
+    """First-channel sample weights (m, k) of :func:`sample` on row 0 of ``P`` for each
+    ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
+    (:mod:`render.df._albedo`)."""
+    m, k = wo.shape[0], pts.shape[0]
+    out = np.empty((m, k))
+    for i in range(m):
+        for j in range(k):
+            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
+                               pts[j, 1], pts[j, 2])[4]
+    return out
 
 @njit
 def albedo(P, row, b, flags, wox, woy, woz, T, t):

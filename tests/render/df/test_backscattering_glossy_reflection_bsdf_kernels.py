@@ -9,7 +9,19 @@ import importlib
 import numpy as np
 import pytest
 from glossy_kernel_lanes import KernelLanes, albedo_lanes, eval_lanes, pack, sample_lanes
-from render_df_cases import edge_dirs, random_dirs
+from render_df_cases import (
+    WOS,
+    DfCase,
+    case_ids,
+    check_consistency,
+    check_integrals,
+    check_no_nan,
+    check_reciprocity,
+    edge_dirs,
+    pair_ids,
+    per_wo,
+    random_dirs,
+)
 
 from render.bsdf import Lobe
 from render.df import backscattering_glossy_reflection_bsdf
@@ -172,3 +184,32 @@ def test_furnace_on_kernels(name, wo, tol):
     tint = np.asarray(CASES[name].get("tint", 1.0)) * np.ones(3)
     assert np.all(mean <= tint + 4 * se)
     assert np.all(np.abs(mean - a) <= tol + 4 * se), (mean, a, se)
+
+
+# --- the df checklist on the kernels (consistency, no NaN, reciprocity, integrals) --------
+
+
+def _kernel_case(cid, name, **kw):
+    return DfCase(cid, lambda: lanes_of(CASES[name])[1], "backscatter", **kw)
+
+
+CHECKLIST = [
+    _kernel_case("r0.3", "r0.3-color", albedo_tol=TAB),
+    _kernel_case("r1", "r1", albedo_tol=TAB),
+    _kernel_case("r0", "r0", chi2=False, narrow=True, albedo_tol=TAB),
+    _kernel_case("r1e-3", "r1e-3", chi2=False, narrow=True, albedo_tol=TAB),
+    _kernel_case("aniso", "aniso-0.1-0.5", albedo_tol=TAB_ANISO),
+]
+INTEGRALS = per_wo([c for c in CHECKLIST if c.id != "r0.3"]) + per_wo(CHECKLIST[:1], WOS[2:])
+
+
+@pytest.mark.parametrize("case", CHECKLIST, ids=case_ids(CHECKLIST))
+def test_checklist_pointwise_on_kernels(case, rng):
+    check_consistency(case, rng)
+    check_no_nan(case, rng)
+    check_reciprocity(case, rng)
+
+
+@pytest.mark.parametrize(("case", "wo"), INTEGRALS, ids=pair_ids(INTEGRALS))
+def test_pdf_integral_furnace_and_albedo_on_kernels(case, wo):
+    check_integrals(case, wo)
