@@ -157,11 +157,23 @@ def albedo(P, row, b, flags, wox, woy, woz):
     mu = abs(woz)
     if not mu > kc.COS_ZERO or black:
         return 0.0, 0.0, 0.0
+    rho, omr = _rho(mu, sigma)
+    return rho * t0 + omr * m0, rho * t1 + omr * m1, rho * t2 + omr * m2
+
+
+@njit
+def _rho(mu, sigma):
+    """The white single-scattering albedo ``rho(mu) = A + B G(mu) / pi`` and ``1 - rho``
+    (``B (C_A - G/pi)``, no cancellation at small ``sigma``)."""
     a = 1.0 / (1.0 + _K_C_A * sigma)
     g = _g_kernel(mu)
-    rho = a + sigma * a * g / _PI
-    omr = sigma * a * max(_K_C_A - g / _PI, 0.0)
-    return rho * t0 + omr * m0, rho * t1 + omr * m1, rho * t2 + omr * m2
+    return a + sigma * a * g / _PI, sigma * a * max(_K_C_A - g / _PI, 0.0)
+
+
+@njit
+def _rho_lanes(mu, sigma, out):
+    for i in range(mu.shape[0]):
+        out[i] = _rho(mu[i], sigma)[0]
 
 
 # --- the Python class ------------------------------------------------------------------
@@ -173,16 +185,14 @@ diffuse_reflection_bsdf = DiffuseReflectionBsdf
 
 def oren_nayar_albedo(mu: ArrayLike, roughness: float) -> Arr:
     """Directional albedo ``rho(mu)`` of the white single-scattering Oren–Nayar lobe
-    (the :func:`albedo` kernel at ``wo.z = mu``).
+    (the closed form the :func:`albedo` kernel evaluates), for ``mu`` (n,) in [0, 1].
 
     Examples
     --------
     >>> np.round(oren_nayar_albedo(np.array([1.0, 0.5, 0.0]), 1.0), 4).tolist()
     [0.7765, 0.8653, 1.0]
     """
-    mu = np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0)
-    wo = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=1)
-    # the closed form's limit at grazing incidence (the kernel returns 0 there)
-    a = DiffuseReflectionBsdf(tint=1.0, roughness=roughness).albedo(
-        np.where((mu > 0.0)[:, None], wo, [[0.0, 0.0, 1.0]]))[:, 0]
-    return np.where(mu > 0.0, a, 1.0)
+    mu = np.ascontiguousarray(np.clip(np.asarray(mu, dtype=np.float64), 0.0, 1.0))
+    out = np.empty(mu.shape)
+    _rho_lanes(mu, float(np.clip(roughness, 0.0, 1.0)), out)
+    return out
