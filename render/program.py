@@ -47,6 +47,7 @@ import numpy as np
 
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe, check_dirs, check_samples
 from render.df._signature import MODE_FLAGS, REQUIRED, THIN_WALLED, Signature
+from render.df._signature import WIDTH as TYPE_WIDTH
 
 __all__ = [
     "Program",
@@ -202,7 +203,9 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
             raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
         if p.type == "float3x3":  # row-major, M[i][j] at slot 3 i + j
             value = np.asarray(value, dtype=np.float64).reshape(-1, 9)
-        a = _as_rows(value, p.width, f"{name}({p.name})")
+        a = _as_rows(value, TYPE_WIDTH.get(p.type, p.width), f"{name}({p.name})")
+        if a.shape[1] != p.width:  # a float packed as a grey colour
+            a = np.repeat(a, p.width, axis=1)
         if p.clamp is not None:
             a = np.clip(a, p.clamp[0], p.clamp[1])
         cols.append(a)
@@ -343,7 +346,8 @@ def mix_program(kind: str, op: int, components: list, color: bool) -> Program:
     each component's weight packed as a colour (3 slots, in order), its df a child."""
     from render.df._mix import component_signature
 
-    sig_c = component_signature(color, kind == "edf")
+    del color
+    sig_c = component_signature(True, kind == "edf")  # the structs hold colour weights
     cols = [pack(sig_c, {"weight": c.weight}, f"{kind} component")[0] for c in components]
     children = [None if c.component is None else c.component.program for c in components]
     return combine(kind, op, _stack(cols), 0, children)
@@ -760,3 +764,39 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
                                       "__module__": module, "mdl_name": mdl_name})
     cls.__signature__ = pysig
     return cls
+
+
+def check_ior(values: dict) -> None:
+    """A layer's ``ior`` must be positive (an index of refraction)."""
+    ior = np.asarray(values["ior"], dtype=np.float64)
+    if not np.all(np.isfinite(ior)) or np.any(ior <= 0.0):
+        raise ValueError(f"ior must be > 0 (an index of refraction), got {values['ior']!r}")
+
+
+def mix_class(py_name: str, mdl_name: str, op: int, color: bool, edf: bool,
+              module: str = "render.df") -> type:
+    """The Python class of a mix (``normalized_mix``, ``clamped_mix``, their colour and
+    edf forms) over a list of component structs or ``(weight, df)`` pairs."""
+    from render.df._mix import as_components
+
+    base_cls = ProgramEdf if edf else ProgramBsdf
+    kind = "edf" if edf else "bsdf"
+
+    def __init__(self, components):  # noqa: N807
+        comps = as_components(components, color, f"df::{mdl_name}")
+        base_cls.__init__(self, mix_program(kind, op, comps, color))
+
+    doc = (f"``df::{mdl_name}`` over {kind} components: its weights (kernels in its module) "
+           "and children, run by :mod:`render.interpreter`.")
+    return type(py_name, (base_cls,), {"__init__": __init__, "__doc__": doc,
+                                       "__module__": module, "mdl_name": mdl_name})
+
+
+def mix_dispatch(components, bsdf_cls: type, edf_cls: type):
+    """A mix of bsdf components, or of edf components (MDL's overloads)."""
+    from render.bsdf import Edf as _Edf
+    from render.df._mix import as_components
+
+    comps = as_components(components, bsdf_cls.__name__.startswith("Color"),
+                          f"df::{bsdf_cls.mdl_name}")
+    return (edf_cls if comps and comps[0]._kind is _Edf else bsdf_cls)(comps)

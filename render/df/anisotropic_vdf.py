@@ -154,7 +154,7 @@ def _check(values: dict) -> None:
 
 
 AnisotropicVdf = df_class("AnisotropicVdf", "anisotropic_vdf", O_ANISOTROPIC_VDF, SIGNATURE,
-                          Lobe.DIFFUSE, check=_check)
+                          Lobe.DIFFUSE, check=_check, module=__name__)
 anisotropic_vdf = AnisotropicVdf
 
 

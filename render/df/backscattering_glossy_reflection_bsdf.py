@@ -39,26 +39,16 @@ import math
 
 import numpy as np
 
-from render._typing import Arr, Arr2, ArrayLike, Rgb, Vec3
+from render._typing import Arr
 from render.bsdf import (
-    Bsdf,
-    BsdfSample,
     Lobe,
-    check_dirs,
-    check_samples,
-    lane_color,
-    lane_float,
-    lane_vector,
-    lanes,
 )
 from render.df import _kernel_common as kc
 from render.df._albedo import node_table, table_albedo
-from render.df._common import orient, tangent_axes
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
-from render.frame import mirror_z
 from render.jit import njit
-from render.numerics import TOL, check_finite, dot, saturate, unitize
+from render.program import O_BACKSCATTERING_GLOSSY, df_class
 
 __all__ = [
     "BackscatteringGlossyReflectionBsdf",
@@ -68,7 +58,6 @@ __all__ = [
     "sample",
     "albedo",
     "albedo_table",
-    "sample_weights",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -244,161 +233,10 @@ def albedo_table(row, flags: int = 0) -> np.ndarray:
     ru, rv = max(row[_RU], kc.ROUGHNESS_MIN), max(row[_RV], kc.ROUGHNESS_MIN)
     return node_table(BackscatteringGlossyReflectionBsdf, None, ru, rv)
 
-class BackscatteringGlossyReflectionBsdf(Bsdf):
-    """``df::backscattering_glossy_reflection_bsdf`` over lanes.
+# --- the Python class ------------------------------------------------------------------
 
-    Parameters
-    ----------
-    roughness_u : float or (n,)
-        Clamped below at ``TOL.roughness_min``.
-    roughness_v : float or (n,) or None
-        ``None`` means ``roughness_u``.
-    tint : float, (3,) or (n, 3)
-        Saturated to [0, 1].
-    tangent_u : (3,) or (n, 3)
-        Anisotropy direction in the local frame (default ``+x``).
-
-    Examples
-    --------
-    >>> b = backscattering_glossy_reflection_bsdf(roughness_u=0.2)
-    >>> wo = np.array([[0.6, 0.0, 0.8]])
-    >>> float(b.eval(wo, wo)[0, 0]) > float(b.eval(wo, np.array([[-0.6, 0.0, 0.8]]))[0, 0])
-    True
-    """
-
-    lobes = Lobe.GLOSSY_REFLECTION
-
-    def __init__(
-        self,
-        roughness_u: ArrayLike,
-        roughness_v: ArrayLike | None = None,
-        tint: ArrayLike = 1.0,
-        tangent_u: ArrayLike = (1.0, 0.0, 0.0),
-    ):
-        self.roughness_u = np.maximum(lane_float(roughness_u, "roughness_u"), TOL.roughness_min)
-        rv = roughness_u if roughness_v is None else roughness_v
-        self.roughness_v = np.maximum(lane_float(rv, "roughness_v"), TOL.roughness_min)
-        self.tint = saturate(lane_color(tint, "tint"))
-        self.tangent_u = lane_vector(tangent_u, "tangent_u")
-        self._black = np.all(self.tint == 0, axis=1)
-
-    def __repr__(self) -> str:
-        return (
-            f"backscattering_glossy_reflection_bsdf(roughness_u={self.roughness_u.tolist()}, "
-            f"roughness_v={self.roughness_v.tolist()}, tint={self.tint.tolist()})"
-        )
-
-    def _setup(self, n: int):
-        ru = np.broadcast_to(lanes(self.roughness_u, n, "roughness_u"), (n,))
-        rv = np.broadcast_to(lanes(self.roughness_v, n, "roughness_v"), (n,))
-        tx, ty, ok = tangent_axes(lanes(self.tangent_u, n, "tangent_u"), n)
-        ok = ok & ~np.broadcast_to(lanes(self._black, n, "tint"), (n,))
-        tint = np.broadcast_to(lanes(self.tint, n, "tint"), (n, 3))
-        return 2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty, ok, tint
-
-    @staticmethod
-    def _p_half(k: Vec3, h: Vec3, e_u, e_v, tx, ty, ok) -> Arr:
-        """Half-vector density of the disk model seen from ``k`` (solid angle of ``h``)."""
-        kt = k[:, 0] * tx + k[:, 1] * ty
-        kb = k[:, 0] * ty - k[:, 1] * tx
-        ht = h[:, 0] * tx + h[:, 1] * ty
-        hb = h[:, 0] * ty - h[:, 1] * tx
-        # the disk point: h scaled to the plane at height n.k, minus k's tip.  It can lie
-        # in the unit disk only if d = nk/nh <= 2/|h_tan| (+ rounding): larger d (h near
-        # the horizon) means no density, and is kept finite
-        nh = np.where(ok, h[:, 2], 1.0)
-        reach = (k[:, 2] * np.hypot(ht, hb) <= 4.0 * nh) & ok
-        safe_nh = np.where(reach, nh, 1.0)
-        d = np.where(reach, k[:, 2] / safe_nh, 0.0)
-        return np.where(reach, _p_disk(d * ht - kt, d * hb - kb, e_u, e_v) * d * d / safe_nh, 0.0)
-
-    def _kernel(self, wo: Vec3, wi: Vec3, setup):
-        e_u, e_v, tx, ty, ok, tint = setup
-        nk1, nk2 = wo[:, 2], wi[:, 2]
-        ok = ok & (nk1 > TOL.cos_zero) & (nk2 > TOL.cos_zero)
-        h, hv = unitize(wo + wi)
-        kh = dot(wo, h)
-        ok &= hv & (h[:, 2] > TOL.cos_zero) & (kh > 0.0)
-        p1 = self._p_half(wo, h, e_u, e_v, tx, ty, ok)
-        p2 = self._p_half(wi, h, e_u, e_v, tx, ty, ok)
-        pmin = np.minimum(p1, p2)
-        ok &= (pmin > 0.0) & (p1 > 0.0)
-        safe_kh = np.where(ok, kh, 1.0)
-        pdf = p1 / (4.0 * safe_kh)
-        # (min(p1, p2)/p1) (nk2 / max(nk1, nk2)): two ratios <= 1, no underflowing product
-        ratio = (np.where(ok, pmin, 0.0) / np.where(ok, p1, 1.0)) * (
-            np.where(ok, nk2, 0.0) / np.where(ok, np.maximum(nk1, nk2), 1.0)
-        )
-        weight = tint * ratio[:, None]
-        # pdf > 0 exactly where eval = weight * pdf > 0 (also where the product underflows)
-        ok &= np.max(weight * pdf[:, None], axis=1) > 0.0
-        return np.where(ok[:, None], weight, 0.0), np.where(ok, pdf, 0.0), ok
-
-    def eval_pdf(self, wo: Vec3, wi: Vec3) -> tuple[Rgb, Arr]:
-        wo, wi = check_dirs(wo, wi)
-        flip, wo, wi = orient(wo, wi)
-        weight, pdf, _ = self._kernel(wo, wi, self._setup(len(wo)))
-        return (
-            check_finite("backscattering.eval", weight * pdf[:, None], True),
-            check_finite("backscattering.pdf", pdf, True),
-        )
-
-    def eval(self, wo: Vec3, wi: Vec3) -> Rgb:
-        return self.eval_pdf(wo, wi)[0]
-
-    def pdf(self, wo: Vec3, wi: Vec3) -> Arr:
-        return self.eval_pdf(wo, wi)[1]
-
-    def sample(self, wo: Vec3, u1: Arr, u2: Arr2) -> BsdfSample:
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        u1, u2 = check_samples(n, u1, u2)
-        flip, wo = orient(wo)
-        setup = self._setup(n)
-        e_u, e_v, tx, ty, ok, _ = setup
-        # a point of the anisotropic disk: phi as Ashikhmin–Shirley, r^2 = 1 - (1-u)^(1/(e+1))
-        q = np.floor(4.0 * u2[:, 0])
-        half = 0.5 * np.pi * (4.0 * u2[:, 0] - q)
-        phi0 = np.arctan2(np.sqrt(e_u + 1.0) * np.sin(half), np.sqrt(e_v + 1.0) * np.cos(half))
-        phi = np.select(
-            [q == 0, q == 1, q == 2], [phi0, np.pi - phi0, np.pi + phi0], 2.0 * np.pi - phi0
-        )
-        cp, sp = np.cos(phi), np.sin(phi)
-        e = e_u * cp * cp + e_v * sp * sp
-        r = np.sqrt(np.maximum(-np.expm1(np.log1p(-u2[:, 1]) / (e + 1.0)), 0.0))
-        x, y = r * cp, r * sp
-        # half vector through the disk point placed at wo's tip; wi mirrors wo about it
-        kt = wo[:, 0] * tx + wo[:, 1] * ty
-        kb = wo[:, 0] * ty - wo[:, 1] * tx
-        at, ab = x + kt, y + kb
-        h, hv = unitize(np.stack([at * tx + ab * ty, at * ty - ab * tx, wo[:, 2]], axis=1))
-        ok &= hv & (wo[:, 2] > TOL.cos_zero)
-        wi = 2.0 * dot(wo, h)[:, None] * h - wo
-        ok &= wi[:, 2] > 0.0
-        weight, pdf, ok2 = self._kernel(wo, wi, setup)
-        ok &= ok2
-        return BsdfSample(
-            np.where(ok[:, None], mirror_z(wi, flip), 0.0),
-            np.where(ok, pdf, 0.0),
-            np.where(ok[:, None], weight, 0.0),
-            np.where(ok, int(Lobe.GLOSSY_REFLECTION), 0).astype(np.int32),
-        ).checked()
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        """Tabulated directional albedo (``render.df._albedo``)."""
-        from render.df._albedo import glossy_albedo
-
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        _, _, tx, ty, ok, tint = self._setup(n)
-        ru = np.broadcast_to(lanes(self.roughness_u, n, "roughness_u"), (n,))
-        rv = np.broadcast_to(lanes(self.roughness_v, n, "roughness_v"), (n,))
-        mu = np.abs(wo[:, 2])
-        phi = np.arctan2(
-            np.abs(wo[:, 0] * ty - wo[:, 1] * tx), np.abs(wo[:, 0] * tx + wo[:, 1] * ty)
-        )
-        E = glossy_albedo(type(self), None, np.ones(n), ru, rv, mu, phi)
-        return np.where((ok & (mu > TOL.cos_zero))[:, None], tint * E[:, None], 0.0)
-
-
+BackscatteringGlossyReflectionBsdf = df_class(
+    "BackscatteringGlossyReflectionBsdf", "backscattering_glossy_reflection_bsdf",
+    O_BACKSCATTERING_GLOSSY, SIGNATURE, Lobe.GLOSSY_REFLECTION,
+    unsupported=("multiscatter_tint",), albedo_table=albedo_table, module=__name__)
 backscattering_glossy_reflection_bsdf = BackscatteringGlossyReflectionBsdf

@@ -27,8 +27,6 @@ Examples
 
 from __future__ import annotations
 
-import numpy as np
-
 from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
     COMPONENT_WIDTH,
     MixBsdf,
@@ -36,9 +34,8 @@ from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
     bsdf_component,
     mix_signatures,
 )
-from render.df.normalized_mix import _dispatch
 from render.jit import njit
-from render.numerics import saturate
+from render.program import O_CLAMPED_MIX, O_CLAMPED_MIX_EDF, mix_class, mix_dispatch
 
 __all__ = [
     "clamped_mix",
@@ -85,51 +82,23 @@ def mix_weights(P, row, b, flags, k, i):
     return _clamped(P, row, b, i), _clamped(P, row, b + 1, i), _clamped(P, row, b + 2, i)
 
 
-class _Clamped:
-    def weights(self, n: int) -> np.ndarray:
-        """(n, k, 3): ``saturate(weight)`` cut where the running sum reaches 1."""
-        w = saturate(self._raw(n))
-        before = np.cumsum(w, axis=1) - w
-        return np.clip(np.minimum(w, 1.0 - before), 0.0, None)
+# --- the Python classes ----------------------------------------------------------------
 
-
-class ClampedMix(_Clamped, MixBsdf):
-    """``df::clamped_mix`` over ``bsdf_component`` values (a Bsdf)."""
-
-    _mdl_name = "clamped_mix"
-
-
-class ColorClampedMix(_Clamped, MixBsdf):
-    """``df::color_clamped_mix`` over ``color_bsdf_component`` values (a Bsdf)."""
-
-    _color = True
-    _mdl_name = "color_clamped_mix"
-
-
-class ClampedMixEdf(_Clamped, MixEdf):
-    """``df::clamped_mix`` over ``edf_component`` values (an Edf)."""
-
-    _mdl_name = "clamped_mix"
-
-
-class ColorClampedMixEdf(_Clamped, MixEdf):
-    """``df::color_clamped_mix`` over ``color_edf_component`` values (an Edf)."""
-
-    _color = True
-    _mdl_name = "color_clamped_mix"
+ClampedMix = mix_class("ClampedMix", "clamped_mix", O_CLAMPED_MIX, False, False, module=__name__)
+ColorClampedMix = mix_class("ColorClampedMix", "color_clamped_mix", O_CLAMPED_MIX, True, False,
+                            module=__name__)
+ClampedMixEdf = mix_class("ClampedMixEdf", "clamped_mix", O_CLAMPED_MIX_EDF, False, True,
+                          module=__name__)
+ColorClampedMixEdf = mix_class("ColorClampedMixEdf", "color_clamped_mix", O_CLAMPED_MIX_EDF,
+                               True, True, module=__name__)
 
 
 def clamped_mix(components):
-    """``df::clamped_mix``: a :class:`ClampedMix` (Bsdf) or :class:`ClampedMixEdf`.
-
-    Parameters
-    ----------
-    components : sequence of bsdf_component or edf_component (or ``(weight, df)`` pairs)
-    """
-    return _dispatch(components, False, ClampedMix, ClampedMixEdf, "clamped_mix")
+    """``df::clamped_mix``: a Bsdf (or Edf) whose saturated weights are cut where their
+    running sum reaches 1."""
+    return mix_dispatch(components, ClampedMix, ClampedMixEdf)
 
 
 def color_clamped_mix(components):
-    """``df::color_clamped_mix``: per-channel clamping (:class:`ColorClampedMix` or
-    :class:`ColorClampedMixEdf`)."""
-    return _dispatch(components, True, ColorClampedMix, ColorClampedMixEdf, "color_clamped_mix")
+    """``df::color_clamped_mix``: per-channel weights, clamped per channel."""
+    return mix_dispatch(components, ColorClampedMix, ColorClampedMixEdf)

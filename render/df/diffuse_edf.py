@@ -56,5 +56,5 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
 
 # --- the Python class ------------------------------------------------------------------
 
-DiffuseEdf = df_class("DiffuseEdf", "diffuse_edf", O_DIFFUSE_EDF, SIGNATURE)
+DiffuseEdf = df_class("DiffuseEdf", "diffuse_edf", O_DIFFUSE_EDF, SIGNATURE, module=__name__)
 diffuse_edf = DiffuseEdf

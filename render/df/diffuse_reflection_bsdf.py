@@ -179,7 +179,8 @@ def _rho_lanes(mu, sigma, out):
 # --- the Python class ------------------------------------------------------------------
 
 DiffuseReflectionBsdf = df_class("DiffuseReflectionBsdf", "diffuse_reflection_bsdf",
-                                 O_DIFFUSE_REFLECTION, SIGNATURE, Lobe.DIFFUSE_REFLECTION)
+                                 O_DIFFUSE_REFLECTION, SIGNATURE, Lobe.DIFFUSE_REFLECTION,
+                                 module=__name__)
 diffuse_reflection_bsdf = DiffuseReflectionBsdf
 
 

@@ -75,5 +75,6 @@ def albedo(P, row, b, flags, wox, woy, woz):
 # --- the Python class ------------------------------------------------------------------
 
 DiffuseTransmissionBsdf = df_class("DiffuseTransmissionBsdf", "diffuse_transmission_bsdf",
-                                   O_DIFFUSE_TRANSMISSION, SIGNATURE, Lobe.DIFFUSE_TRANSMISSION)
+                                   O_DIFFUSE_TRANSMISSION, SIGNATURE, Lobe.DIFFUSE_TRANSMISSION,
+                                   module=__name__)
 diffuse_transmission_bsdf = DiffuseTransmissionBsdf

@@ -23,20 +23,19 @@ points).  The EDF overload (MDL 1.7) is not implemented.
 
 from __future__ import annotations
 
-import numpy as np
-
-from render._typing import ArrayLike, Rgb, Vec3
-from render.bsdf import Lobe, check_dirs, lane_color, lane_float, lanes
 from render.df import _kernel_common as kc
-from render.df._combine import albedo_correction, cheap_albedo, check_child, is_mirror
-from render.df._layer import f82_curve, f82_curve1
-from render.df._scaled import ScaledBsdf
+from render.df._layer import f82_curve1
 from render.df._signature import Param, Signature
-from render.frame import mirror_z
 from render.jit import njit
-from render.numerics import saturate, unitize
+from render.program import O_DIRECTIONAL_FACTOR, df_class
 
-__all__ = ["DirectionalFactor", "directional_factor", "SIGNATURE", "scale"]
+__all__ = [
+    "DirectionalFactor",
+    "directional_factor",
+    "SIGNATURE",
+    "scale",
+    "curve_constant",
+]
 
 
 # --- signature and kernels (the compiled render core) ---------------------------------
@@ -92,91 +91,8 @@ def curve_constant(P, row, b, flags):
     return True
 
 
-class DirectionalFactor(ScaledBsdf):
-    """``df::directional_factor`` over lanes (eval, pdf and sampling: :class:`ScaledBsdf`).
+# --- the Python class ------------------------------------------------------------------
 
-    Parameters
-    ----------
-    normal_tint, grazing_tint : float, (3,) or (n, 3)
-        ``R0`` and ``R90``, saturated.
-    f82_factor : float, (3,) or (n, 3)
-        Hoffman's F82 tint, saturated (1: none).
-    exponent : float or (n,)
-        Negative values act as 0.
-    base : Bsdf or None
-        None is MDL's black ``bsdf()``.
-
-    Examples
-    --------
-    >>> from render.df import specular_bsdf
-    >>> d = directional_factor(normal_tint=(0.9, 0.5, 0.1), grazing_tint=1.0, exponent=5.0,
-    ...                        base=specular_bsdf())
-    >>> wo = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8]])
-    >>> np.round(d.albedo(wo), 6).tolist()   # R0 + (1 - R0) 0.2^5 at 36.9 degrees
-    [[0.9, 0.5, 0.1], [0.900032, 0.50016, 0.100288]]
-    """
-
-    name = "directional_factor"
-
-    def __init__(self, normal_tint: ArrayLike = 1.0, grazing_tint: ArrayLike = 1.0,
-                 f82_factor: ArrayLike = 1.0, exponent: ArrayLike = 5.0, base=None):
-        super().__init__()
-        self.normal_tint = saturate(lane_color(normal_tint, "normal_tint"))
-        self.grazing_tint = saturate(lane_color(grazing_tint, "grazing_tint"))
-        self.f82_factor = saturate(lane_color(f82_factor, "f82_factor"))
-        self.exponent = np.maximum(lane_float(exponent, "exponent"), 0.0)
-        self.base = check_child(base, "base")
-        self.lobes = Lobe.NONE if self.base is None else self.base.lobes
-
-    def __repr__(self) -> str:
-        return (f"directional_factor(normal_tint={self.normal_tint.tolist()}, "
-                f"grazing_tint={self.grazing_tint.tolist()}, exponent={self.exponent.tolist()}, "
-                f"base={self.base!r})")
-
-    def _params(self, n: int):
-        return (
-            np.broadcast_to(lanes(self.normal_tint, n, "normal_tint"), (n, 3)),
-            np.broadcast_to(lanes(self.grazing_tint, n, "grazing_tint"), (n, 3)),
-            np.broadcast_to(lanes(self.f82_factor, n, "f82_factor"), (n, 3)),
-            np.broadcast_to(lanes(self.exponent, n, "exponent"), (n,)),
-        )
-
-    def _scale(self, wo: Vec3, wi: Vec3) -> Rgb:
-        """``C(wo.h)`` with the reflection half vector (transmitted ``wi`` mirrored)."""
-        n = len(wo)
-        s = np.where(wo[:, 2] < 0.0, -1.0, 1.0)[:, None]
-        o = wo * np.concatenate([np.ones((n, 2)), s], axis=1)
-        i = wi * np.concatenate([np.ones((n, 2)), s], axis=1)
-        h, ok = unitize(o + mirror_z(i, i[:, 2] < 0.0))
-        h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
-        kh = np.einsum("ij,ij->i", o, h)
-        r0, r90, f82, p = self._params(n)
-        return np.where((kh >= 0.0)[:, None], f82_curve(kh, r0, r90, f82, p), 0.0)
-
-    def _constant(self, n: int) -> bool:
-        r0, r90, f82, p = self._params(n)
-        return bool(np.all(f82 == 1.0) and (np.all(r0 == r90) or np.all(p == 0.0)))
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        """``C(nk1) base.albedo`` plus the integral of ``C(wo.h) - C(nk1)`` over the base's
-        lobe (:func:`render.df._combine.albedo_correction`; exact for a mirror base or a
-        constant curve)."""
-        (wo,) = check_dirs(wo, names=("wo",))
-        n = len(wo)
-        if self.base is None:
-            return np.zeros((n, 3))
-        r0, r90, f82, p = self._params(n)
-        est = f82_curve(np.abs(wo[:, 2]), r0, r90, f82, p)
-        out = est * self.base.albedo(wo)
-        if not (self._constant(n) or is_mirror(self.base)):
-            out += albedo_correction(self.base, wo, lambda wi: self._scale(wo, wi), est)
-        return np.clip(out, 0.0, None)
-
-    def _cheap_albedo_now(self, wo: Vec3) -> Rgb:
-        n = len(wo)
-        r0, r90, f82, p = self._params(n)
-        c = f82_curve(np.abs(wo[:, 2]), r0, r90, f82, p)
-        return c * cheap_albedo(self.base, wo)
-
-
+DirectionalFactor = df_class("DirectionalFactor", "directional_factor", O_DIRECTIONAL_FACTOR,
+                             SIGNATURE, module=__name__)
 directional_factor = DirectionalFactor

@@ -25,14 +25,8 @@ Examples
 
 from __future__ import annotations
 
-import numpy as np
-
 from render.df._mix import (
     COMPONENT_WIDTH,
-    BsdfComponent,
-    MixBsdf,
-    MixEdf,
-    as_components,
     bsdf_component,
     color_bsdf_component,
     color_edf_component,
@@ -40,6 +34,7 @@ from render.df._mix import (
     mix_signatures,
 )
 from render.jit import njit
+from render.program import O_NORMALIZED_MIX, O_NORMALIZED_MIX_EDF, mix_class, mix_dispatch
 
 __all__ = [
     "normalized_mix",
@@ -87,59 +82,24 @@ def mix_weights(P, row, b, flags, k, i):
             w2 / s2 if s2 > 1.0 else w2)
 
 
-class _Normalized:
-    def weights(self, n: int) -> np.ndarray:
-        """(n, k, 3): ``max(weight, 0)``, divided by the channel's sum where it exceeds 1."""
-        w = np.maximum(self._raw(n), 0.0)
-        s = w.sum(axis=1, keepdims=True)
-        return np.where(s > 1.0, w / np.where(s > 1.0, s, 1.0), w)
+# --- the Python classes ----------------------------------------------------------------
 
-
-class NormalizedMix(_Normalized, MixBsdf):
-    """``df::normalized_mix`` over ``bsdf_component`` values (a Bsdf)."""
-
-    _mdl_name = "normalized_mix"
-
-
-class ColorNormalizedMix(_Normalized, MixBsdf):
-    """``df::color_normalized_mix`` over ``color_bsdf_component`` values (a Bsdf)."""
-
-    _color = True
-    _mdl_name = "color_normalized_mix"
-
-
-class NormalizedMixEdf(_Normalized, MixEdf):
-    """``df::normalized_mix`` over ``edf_component`` values (an Edf)."""
-
-    _mdl_name = "normalized_mix"
-
-
-class ColorNormalizedMixEdf(_Normalized, MixEdf):
-    """``df::color_normalized_mix`` over ``color_edf_component`` values (an Edf)."""
-
-    _color = True
-    _mdl_name = "color_normalized_mix"
-
-
-def _dispatch(components, color: bool, bsdf_cls, edf_cls, name: str):
-    comps = as_components(components, color, name)
-    if comps and comps[0]._kind is not BsdfComponent._kind:
-        return edf_cls(comps)
-    return bsdf_cls(comps)
+NormalizedMix = mix_class("NormalizedMix", "normalized_mix", O_NORMALIZED_MIX, False, False,
+                          module=__name__)
+ColorNormalizedMix = mix_class("ColorNormalizedMix", "color_normalized_mix",
+                               O_NORMALIZED_MIX, True, False, module=__name__)
+NormalizedMixEdf = mix_class("NormalizedMixEdf", "normalized_mix", O_NORMALIZED_MIX_EDF,
+                             False, True, module=__name__)
+ColorNormalizedMixEdf = mix_class("ColorNormalizedMixEdf", "color_normalized_mix",
+                                  O_NORMALIZED_MIX_EDF, True, True, module=__name__)
 
 
 def normalized_mix(components):
-    """``df::normalized_mix``: a :class:`NormalizedMix` (Bsdf) or :class:`NormalizedMixEdf`.
-
-    Parameters
-    ----------
-    components : sequence of bsdf_component or edf_component (or ``(weight, df)`` pairs)
-    """
-    return _dispatch(components, False, NormalizedMix, NormalizedMixEdf, "normalized_mix")
+    """``df::normalized_mix``: a Bsdf (or, over ``edf_component`` values, an Edf) whose
+    weights are ``max(weight, 0)`` divided by their sum where it exceeds 1."""
+    return mix_dispatch(components, NormalizedMix, NormalizedMixEdf)
 
 
 def color_normalized_mix(components):
-    """``df::color_normalized_mix``: per-channel weights (:class:`ColorNormalizedMix` or
-    :class:`ColorNormalizedMixEdf`)."""
-    return _dispatch(components, True, ColorNormalizedMix, ColorNormalizedMixEdf,
-                     "color_normalized_mix")
+    """``df::color_normalized_mix``: per-channel weights, normalised per channel."""
+    return mix_dispatch(components, ColorNormalizedMix, ColorNormalizedMixEdf)

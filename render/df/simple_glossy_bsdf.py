@@ -50,11 +50,10 @@ import math
 
 import numpy as np
 
-from render._typing import Arr, Arr2
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import node_table, table_albedo
-from render.df._microfacet import MicrofacetBsdf, mf_finish, mf_geometry, mf_sample_dir
+from render.df._microfacet import mf_finish, mf_geometry, mf_sample_dir
 from render.df._signature import (
     MODE_FLAGS,
     MODE_MASK,
@@ -65,17 +64,16 @@ from render.df._signature import (
     Signature,
 )
 from render.jit import njit
+from render.program import O_SIMPLE_GLOSSY, df_class
 
 __all__ = [
     "SimpleGlossyBsdf",
     "simple_glossy_bsdf",
-    "AshikhminShirley",
     "SIGNATURE",
     "eval_pdf",
     "sample",
     "albedo",
     "albedo_table",
-    "sample_weights",
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
@@ -277,73 +275,11 @@ def albedo_table(row, flags: int) -> np.ndarray:
     o, i = kc.ior_pair(row[_IOR_OUT], row[_IOR_IN], False, False, True)
     return node_table(SimpleGlossyBsdf, key, ru, rv, i / o, o / i)
 
-class AshikhminShirley:
-    """Anisotropic Ashikhmin–Shirley half-vector density ``D(h) (n.h)`` over lanes.
+# --- the Python class ------------------------------------------------------------------
 
-    Parameters
-    ----------
-    roughness_u, roughness_v : (n,) float64
-        Already clamped to ``>= TOL.roughness_min``; exponents ``e = 2 / r^2``.
-
-    Examples
-    --------
-    >>> d = AshikhminShirley(np.array([0.5]), np.array([0.5]))
-    >>> round(float(d.d_cos(np.zeros(1), np.zeros(1), np.ones(1))[0] * 2 * np.pi), 12)
-    9.0
-    """
-
-    def __init__(self, roughness_u: Arr, roughness_v: Arr):
-        self.e_u = 2.0 / (roughness_u * roughness_u)
-        self.e_v = 2.0 / (roughness_v * roughness_v)
-        self.norm = np.sqrt((self.e_u + 1.0) * (self.e_v + 1.0)) / (2.0 * np.pi)
-
-    def d_cos(self, ht: Arr, hb: Arr, hn: Arr) -> Arr:
-        """``D(h) (n.h)`` for unit half vectors given in the anisotropy frame."""
-        s2 = ht * ht + hb * hb
-        valid = (hn > 0.0) & (s2 < 1.0)
-        s2c = np.where(valid, s2, 0.5)
-        # (n.h)^(x) = exp(x/2 * log(1 - s2)); x s2 = e_u ht^2 + e_v hb^2 stays finite as s2 -> 0
-        ratio = np.where(s2c > 0.0, np.log1p(-s2c) / np.where(s2c > 0.0, s2c, 1.0), -1.0)
-        expo = 0.5 * (self.e_u * ht * ht + self.e_v * hb * hb) * ratio
-        return np.where(valid, self.norm * np.exp(expo), 0.0)
-
-    def sample(self, u: Arr2) -> tuple[Arr, Arr, Arr]:
-        """Half vectors ``(ht, hb, hn)`` with density ``D(h) (n.h)``, from ``u`` (n, 2)."""
-        # azimuth: quadrant from u0, then tan(phi) = sqrt((e_u+1)/(e_v+1)) tan(pi u'/2)
-        q = np.floor(4.0 * u[:, 0])
-        up = 4.0 * u[:, 0] - q
-        half = 0.5 * np.pi * up
-        phi0 = np.arctan2(
-            np.sqrt(self.e_u + 1.0) * np.sin(half), np.sqrt(self.e_v + 1.0) * np.cos(half)
-        )
-        phi = np.select(
-            [q == 0, q == 1, q == 2], [phi0, np.pi - phi0, np.pi + phi0], 2.0 * np.pi - phi0
-        )
-        cp, sp = np.cos(phi), np.sin(phi)
-        e = self.e_u * cp * cp + self.e_v * sp * sp
-        # cos theta = (1 - u1)^(1/(e+1)); keep 1 - cos accurate for huge exponents
-        one_minus_cos = -np.expm1(np.log1p(-u[:, 1]) / (e + 1.0))
-        cos_t = 1.0 - one_minus_cos
-        sin_t = np.sqrt(np.maximum(one_minus_cos * (2.0 - one_minus_cos), 0.0))
-        return sin_t * cp, sin_t * sp, cos_t
-
-
-class SimpleGlossyBsdf(MicrofacetBsdf):
-    """``df::simple_glossy_bsdf`` over lanes (parameters: :class:`MicrofacetBsdf`).
-
-    Examples
-    --------
-    >>> g = simple_glossy_bsdf(roughness_u=0.3)
-    >>> wo = np.array([[0.0, 0.0, 1.0]])
-    >>> s = g.sample(wo, np.array([0.3]), np.array([[0.2, 0.7]]))
-    >>> bool(np.allclose(g.eval(wo, s.wi) / g.pdf(wo, s.wi)[:, None], s.weight))
-    True
-    """
-
-    _mdl_name = "simple_glossy_bsdf"
-
-    def _distribution(self, ru: Arr, rv: Arr) -> AshikhminShirley:
-        return AshikhminShirley(ru, rv)
-
-
+SimpleGlossyBsdf = df_class(
+    "SimpleGlossyBsdf", "simple_glossy_bsdf", O_SIMPLE_GLOSSY, SIGNATURE,
+    {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
+     "scatter_reflect_transmit": Lobe.GLOSSY},
+    unsupported=("multiscatter_tint",), albedo_table=albedo_table, module=__name__)
 simple_glossy_bsdf = SimpleGlossyBsdf

@@ -127,5 +127,5 @@ def albedo(P, row, b, flags, wox, woy, woz):
 SpecularBsdf = df_class("SpecularBsdf", "specular_bsdf", O_SPECULAR, SIGNATURE,
                         {"scatter_reflect": Lobe.SPECULAR_REFLECTION,
                          "scatter_transmit": Lobe.SPECULAR,
-                         "scatter_reflect_transmit": Lobe.SPECULAR})
+                         "scatter_reflect_transmit": Lobe.SPECULAR}, module=__name__)
 specular_bsdf = SpecularBsdf

@@ -168,5 +168,5 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
 
 # --- the Python class ------------------------------------------------------------------
 
-SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE)
+SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE, module=__name__)
 spot_edf = SpotEdf

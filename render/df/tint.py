@@ -20,17 +20,16 @@ Examples
 
 from __future__ import annotations
 
-import numpy as np
-
-from render._typing import ArrayLike, Rgb, Vec3
-from render.bsdf import Lobe, check_dirs, lane_color, lanes
-from render.df._combine import cheap_albedo, check_child
-from render.df._scaled import ScaledBsdf
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.numerics import saturate
+from render.program import O_TINT, df_class
 
-__all__ = ["Tint", "tint", "SIGNATURE", "scale"]
+__all__ = [
+    "Tint",
+    "tint",
+    "SIGNATURE",
+    "scale",
+]
 
 
 # --- signature and kernels (the compiled render core) ---------------------------------
@@ -51,42 +50,7 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
 
 
-class Tint(ScaledBsdf):
-    """``df::tint`` over lanes (eval, pdf and sampling: :class:`ScaledBsdf`).
+# --- the Python class ------------------------------------------------------------------
 
-    Parameters
-    ----------
-    tint : float, (3,) or (n, 3)
-        Saturated to [0, 1].
-    base : Bsdf or None
-        None is MDL's black ``bsdf()``.
-    """
-
-    name = "tint"
-
-    def __init__(self, tint: ArrayLike, base=None):
-        super().__init__()
-        self.tint = saturate(lane_color(tint, "tint"))
-        self.base = check_child(base, "base")
-        self.lobes = Lobe.NONE if self.base is None else self.base.lobes
-
-    def __repr__(self) -> str:
-        return f"tint(tint={self.tint.tolist()}, base={self.base!r})"
-
-    def _t(self, n: int) -> Rgb:
-        return np.broadcast_to(lanes(self.tint, n, "tint"), (n, 3))
-
-    def _scale(self, wo: Vec3, wi: Vec3) -> Rgb:
-        return self._t(len(wo))
-
-    def albedo(self, wo: Vec3) -> Rgb:
-        (wo,) = check_dirs(wo, names=("wo",))
-        if self.base is None:
-            return np.zeros((len(wo), 3))
-        return self._t(len(wo)) * self.base.albedo(wo)
-
-    def _cheap_albedo_now(self, wo: Vec3) -> Rgb:
-        return self._t(len(wo)) * cheap_albedo(self.base, wo)
-
-
+Tint = df_class("Tint", "tint", O_TINT, SIGNATURE, module=__name__)
 tint = Tint

@@ -26,18 +26,25 @@ the sampler really draws from.
 
 from __future__ import annotations
 
-import numpy as np
-
-from render._typing import ArrayLike, Vec3
-from render.bsdf import lane_color, lane_float, lanes
-from render.df._layer import LayerBsdf
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.numerics import saturate
+from render.program import O_WEIGHTED_LAYER, df_class
 
-__all__ = ["WeightedLayer", "weighted_layer", "ColorWeightedLayer", "color_weighted_layer",
-           "SIGNATURE", "COLOR_SIGNATURE", "layer_factors", "layer_estimates",
-           "layer_possible", "curve_h", "curve_nk", "curve_constant", "curve_is_one"]
+__all__ = [
+    "WeightedLayer",
+    "weighted_layer",
+    "ColorWeightedLayer",
+    "color_weighted_layer",
+    "SIGNATURE",
+    "COLOR_SIGNATURE",
+    "layer_factors",
+    "layer_estimates",
+    "layer_possible",
+    "curve_h",
+    "curve_nk",
+    "curve_constant",
+    "curve_is_one",
+]
 
 
 # --- signature and kernels (the compiled render core) ---------------------------------
@@ -108,81 +115,11 @@ def curve_is_one(P, row, b, flags):
     return True
 
 
-class WeightedLayer(LayerBsdf):
-    """``df::weighted_layer`` over lanes.
+# --- the Python classes ----------------------------------------------------------------
 
-    Parameters
-    ----------
-    weight : float or (n,)
-        Saturated to [0, 1].
-    layer, base : Bsdf or None
-        None is MDL's black ``bsdf()``.
-    normal : (3,) or (n, 3)
-        The layer's normal in the inherited local frame (default: the inherited one).
-    tangent_u : (3,) or (n, 3)
-        ``state::texture_tangent_u(0)`` in the inherited local frame (orients the frame
-        of a tilted ``normal``).
-
-    Examples
-    --------
-    >>> from render.df import diffuse_reflection_bsdf
-    >>> wl = weighted_layer(weight=0.25, layer=diffuse_reflection_bsdf(tint=1.0),
-    ...                     base=diffuse_reflection_bsdf(tint=0.0))
-    >>> wo = np.array([[0.0, 0.0, 1.0]])
-    >>> np.round(wl.eval(wo, wo) * np.pi, 12).tolist(), np.round(wl.albedo(wo), 12).tolist()
-    ([[0.25, 0.25, 0.25]], [[0.25, 0.25, 0.25]])
-    """
-
-    _directional = False
-
-    def __init__(self, weight: ArrayLike = 1.0, layer=None, base=None,
-                 normal: ArrayLike = (0.0, 0.0, 1.0), tangent_u: ArrayLike = (1.0, 0.0, 0.0)):
-        super().__init__(layer, base, normal, tangent_u)
-        w = saturate(self._weight_param(weight))
-        self.weight = w
-
-    @staticmethod
-    def _weight_param(weight):
-        w = lane_float(weight, "weight")
-        return w[..., None] * np.ones(3) if w.ndim else np.full((1, 3), float(w))
-
-    def __repr__(self) -> str:
-        return (f"{type(self).__name__}(weight={self.weight.tolist()}, layer={self.layer!r}, "
-                f"base={self.base!r})")
-
-    def _w(self, n: int) -> np.ndarray:
-        return np.broadcast_to(lanes(self.weight, n, "weight"), (n, 3))
-
-    def _factors(self, wo: Vec3, wi: Vec3, wo_l: Vec3, wi_l: Vec3):
-        w = self._w(len(wo))
-        return w, 1.0 - w
-
-    def _estimates(self, wo: Vec3, wo_l: Vec3):
-        return self._factors(wo, wo, wo_l, wo_l)
-
-    def _possible(self, n: int):
-        w = self._w(n)
-        pos_l = np.full(n, self.layer is not None) & np.any(w > 0.0, axis=1)
-        pos_b = np.full(n, self.base is not None) & np.any(w < 1.0, axis=1)
-        return pos_l, pos_b
-
-
-class ColorWeightedLayer(WeightedLayer):
-    """``df::color_weighted_layer`` over lanes: ``weight`` is a colour, per channel.
-
-    Examples
-    --------
-    >>> from render.df import diffuse_reflection_bsdf
-    >>> cl = color_weighted_layer(weight=(1.0, 0.5, 0.0), layer=diffuse_reflection_bsdf(),
-    ...                           base=diffuse_reflection_bsdf(tint=(0.0, 0.0, 0.5)))
-    >>> np.round(cl.albedo(np.array([[0.0, 0.0, 1.0]])), 12).tolist()
-    [[1.0, 0.5, 0.5]]
-    """
-
-    @staticmethod
-    def _weight_param(weight):
-        return lane_color(weight, "weight")
-
-
+WeightedLayer = df_class("WeightedLayer", "weighted_layer", O_WEIGHTED_LAYER, SIGNATURE,
+                         module=__name__)
 weighted_layer = WeightedLayer
+ColorWeightedLayer = df_class("ColorWeightedLayer", "color_weighted_layer", O_WEIGHTED_LAYER,
+                              COLOR_SIGNATURE, module=__name__)
 color_weighted_layer = ColorWeightedLayer
