@@ -23,7 +23,7 @@ against quadrature and Monte Carlo: ``tests/render/df``.
 For the compiled render core, :func:`node_table` bakes one df node's roughness (and IOR)
 into a short table (the columns above, interpolated in roughness, for ``wo`` on either
 side) and the kernel :func:`table_albedo` interpolates it in ``mu`` (and ``phi``), as
-:func:`glossy_albedo` does; the dfs' ``albedo`` kernels read it.  Tables are not built at
+the numpy tables did; the dfs' ``albedo`` kernels read it.  Tables are not built at
 import and frozen into the kernels: one isotropic column costs about 0.3 s of sampling
 and one anisotropic corner 0.35 s (2 busy cores), so a full grid is ~10 s per (mode,
 IOR) isotropic and ~7 min anisotropic, and a refracting mode needs it per IOR; a node
@@ -42,7 +42,6 @@ from render._typing import Arr
 from render.jit import njit
 
 __all__ = [
-    "glossy_albedo",
     "iso_column",
     "aniso_column",
     "node_table",
@@ -133,95 +132,13 @@ def _locate(y: Arr, nodes: Arr) -> tuple[np.ndarray, Arr]:
     return i, f
 
 
-def glossy_albedo(
-    cls: type, mode, eta: Arr, roughness_u: Arr, roughness_v: Arr, mu: Arr, phi: Arr
-) -> Arr:
-    """Interpolated white albedo ``E`` per lane.
-
-    Parameters
-    ----------
-    cls : type
-        The df class (constructed as ``cls(roughness_u=, roughness_v=[, mode=, ior_inside=])``).
-    mode : ScatterMode or None
-        ``None`` for lobes without modes; reflect tables ignore ``eta``.
-    eta : (n,) float64
-        Relative IOR ``eta2 / eta1`` per lane.
-    roughness_u, roughness_v : (n,) float64
-    mu : (n,) float64
-        ``|cos theta_o|``.
-    phi : (n,) float64
-        Azimuth of ``wo`` from ``tangent_u`` (only anisotropic lanes use it).
-
-    Returns
-    -------
-    (n,) float64
-    """
-    n = len(mu)
-    ru = np.clip(roughness_u, ROUGHNESS_NODES[0], 1.0)
-    rv = np.clip(roughness_v, ROUGHNESS_NODES[0], 1.0)
-    eta_key = np.round(np.broadcast_to(eta, (n,)), 4)
-    out = np.zeros(n)
-    aniso = ru != rv
-    # isotropic lanes: 2 roughness columns, linear in sqrt(mu) and sqrt(r)
-    iso = np.nonzero(~aniso)[0]
-    if len(iso):
-        j, fx = _locate(np.sqrt(mu[iso]), np.linspace(0.0, 1.0, N_MU))
-        i, fy = _locate(np.sqrt(ru[iso]), _Y)
-        etas, e_idx = np.unique(eta_key[iso], return_inverse=True)
-        # a lane exactly on a node reads one column (the other's weight is 0)
-        i = np.where(fy >= 1.0, i + 1, i)
-        fy = np.where(fy >= 1.0, 0.0, fy)
-        i1 = np.where(fy > 0.0, i + 1, i)
-        codes = np.concatenate([e_idx * len(_Y) + i, e_idx * len(_Y) + i1])
-        uniq, inv = np.unique(codes, return_inverse=True)
-        table = np.stack(
-            [iso_column(cls, mode, float(etas[c // len(_Y)]), int(c % len(_Y))) for c in uniq]
-        )
-        r0, r1 = inv[: len(iso)], inv[len(iso) :]
-
-        def at(row):
-            return (1.0 - fx) * table[row, j] + fx * table[row, j + 1]
-
-        out[iso] = (1.0 - fy) * at(r0) + fy * at(r1)
-    # anisotropic lanes: 4 roughness corners, bilinear in (phi, sqrt(mu))
-    an = np.nonzero(aniso)[0]
-    if len(an):
-        j, fx = _locate(np.sqrt(mu[an]), np.linspace(0.0, 1.0, N_MU_A))
-        # trigonometric interpolation weights in phi: E(phi) = sum_k w_k(phi) E(phi_k)
-        wphi = np.cos(2.0 * np.outer(phi[an], np.arange(N_PHI))) @ _COS_INV.T  # (m, N_PHI)
-        iu, fu = _locate(np.sqrt(ru[an]), _Y)
-        iv, fv = _locate(np.sqrt(rv[an]), _Y)
-        etas, e_idx = np.unique(eta_key[an], return_inverse=True)
-        ny = len(_Y)
-        corners = [(du, dv) for du in (0, 1) for dv in (0, 1)]
-        codes = np.concatenate([(e_idx * ny + iu + du) * ny + iv + dv for du, dv in corners])
-        uniq, inv = np.unique(codes, return_inverse=True)
-        table = np.stack(
-            [
-                aniso_column(cls, mode, float(etas[c // (ny * ny)]), int(c // ny % ny), int(c % ny))
-                for c in uniq
-            ]
-        )
-        m = len(an)
-        acc = np.zeros(m)
-        for c, (du, dv) in enumerate(corners):
-            row = inv[c * m : (c + 1) * m]
-            at_nodes = (1 - fx)[:, None] * table[row, :, j] + fx[:, None] * table[row, :, j + 1]
-            val = np.sum(wphi * at_nodes, axis=1)
-            acc += (fu if du else 1 - fu) * (fv if dv else 1 - fv) * val
-        out[an] = acc
-    return out
-
-
-# --- one node's table and its compiled lookup ----------------------------------------------
-
 _MU_NODES_A = np.linspace(0.0, 1.0, N_MU_A)
 _ISO, _ANISO = 0.0, 1.0
 _HEADER = 2
 
 
 def _iso_node(cls, mode, eta: float, ru: float) -> Arr:
-    """``E`` at the ``N_MU`` nodes, interpolated in ``sqrt(r)`` (as :func:`glossy_albedo`)."""
+    """``E`` at the ``N_MU`` nodes, interpolated in ``sqrt(r)`` (linear in ``sqrt(r)``)."""
     i, fy = _locate(np.sqrt(np.array([ru])), _Y)
     i, fy = int(i[0]), float(fy[0])
     if fy >= 1.0:

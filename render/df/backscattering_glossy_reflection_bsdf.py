@@ -39,7 +39,6 @@ import math
 
 import numpy as np
 
-from render._typing import Arr
 from render.bsdf import (
     Lobe,
 )
@@ -189,17 +188,6 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     if flip:
         wiz = -wiz
     return wix, wiy, wiz, pdf, w0, w1, w2, _GLOSSY_R
-
-
-def _p_disk(x: Arr, y: Arr, e_u: Arr, e_v: Arr) -> Arr:
-    """The anisotropic disk density (0 outside the unit disk)."""
-    r2 = x * x + y * y
-    inside = r2 < 1.0
-    r2c = np.where(inside, r2, 0.5)
-    ratio = np.where(r2c > 0.0, np.log1p(-r2c) / np.where(r2c > 0.0, r2c, 1.0), -1.0)
-    expo = (e_u * x * x + e_v * y * y) * ratio
-    norm = np.sqrt((e_u + 1.0) * (e_v + 1.0)) / np.pi
-    return np.where(inside, norm * np.exp(expo), 0.0)
 
 
 @njit
