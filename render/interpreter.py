@@ -1060,6 +1060,16 @@ def edf_sample_batch(code, kids, frames, P, tables, u1, u2, wo, pdf, weight):
         weight[i, 0], weight[i, 1], weight[i, 2] = s[4], s[5], s[6]
 
 
+@njit
+def mix_weights_batch(op, P, b, out):
+    """A mix's effective component weights over lanes: ``out`` (n, k, 3)."""
+    k = out.shape[1]
+    for i in range(out.shape[0]):
+        for j in range(k):
+            out[i, j, 0], out[i, j, 1], out[i, j, 2] = _mix_weight(op, P, _row(P, i), b, 0,
+                                                                   k, j)
+
+
 # ------------------------------------------------------------------ Ĉ tables
 @njit
 def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):

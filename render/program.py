@@ -149,7 +149,7 @@ def _as_rows(value, width: int, name: str) -> np.ndarray:
         elif a.shape[0] == width:
             a = a[None, :]
         else:
-            raise ValueError(f"{name} must have {width} components (or one per lane), "
+            raise ValueError(f"{name} must be a number, {width} numbers or one row per lane, "
                              f"got shape {a.shape}")
     elif a.ndim == 2 and a.shape[1] == 1 and width > 1:
         a = np.repeat(a, width, axis=1)
@@ -203,14 +203,14 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
             raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
         if p.type == "float3x3":  # row-major, M[i][j] at slot 3 i + j
             value = np.asarray(value, dtype=np.float64).reshape(-1, 9)
-        a = _as_rows(value, TYPE_WIDTH.get(p.type, p.width), f"{name}({p.name})")
+        a = _as_rows(value, TYPE_WIDTH.get(p.type, p.width), f"{name}: {p.name}")
         if a.shape[1] != p.width:  # a float packed as a grey colour
             a = np.repeat(a, p.width, axis=1)
         if p.clamp is not None:
             a = np.clip(a, p.clamp[0], p.clamp[1])
         cols.append(a)
     for c in signature.context:
-        a = _as_rows(values.get(c, _CONTEXT_DEFAULTS.get(c, 1.0)), 1, f"{name}({c})")
+        a = _as_rows(values.get(c, _CONTEXT_DEFAULTS.get(c, 1.0)), 1, f"{name}: {c}")
         if c.startswith("ior") and np.any(a <= 0.0):
             raise ValueError(f"{name}: {c} must be > 0 (an index of refraction), got {a.min()}")
         cols.append(a)
@@ -755,13 +755,36 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
             program = Program(program.kind, program.code, program.kids, program.frames,
                               program.P, program.tables, leaf_lobes)
         base_cls.__init__(self, program)
+        for c, child in zip(children, kids, strict=True):
+            self.__dict__[c] = child
 
     doc = (f"``{title}`` over lanes: its kernels, run by :mod:`render.interpreter`.\n\n"
            f"Parameters (MDL's, constants or one value per lane): "
            f"{', '.join(names)}" + (f"; renderer context: {', '.join(n for n, _ in extra)}"
                                      if extra else "") + ".")
+    def __getattr__(self, key):  # noqa: N807
+        """A packed parameter of the root node as stored (clamped): ``(rows,)`` for a
+        float, ``(rows, w)`` otherwise; ``mode`` as its MDL name."""
+        prog = self.__dict__.get("program")
+        if prog is None or key.startswith("__"):
+            raise AttributeError(key)
+        root = prog.code[prog.root]
+        if key == "mode" and "mode" in names:
+            flags = int(root[FLAGS]) & 3
+            return next(m for m, f in MODE_FLAGS.items() if f == flags)
+        if key == "thin_walled" and signature.context:
+            return bool(int(root[FLAGS]) & THIN_WALLED)
+        try:
+            at = signature.offset(key)
+        except KeyError:
+            raise AttributeError(f"{py_name} has no attribute {key!r}") from None
+        width = 1 if key in signature.context else signature.param(key).width
+        cols = prog.P[:, root[BASE] + at:root[BASE] + at + width]
+        return cols[:, 0] if width == 1 else cols
+
     cls = type(py_name, (base_cls,), {"__init__": __init__, "__doc__": doc,
-                                      "__module__": module, "mdl_name": mdl_name})
+                                      "__getattr__": __getattr__, "__module__": module,
+                                      "mdl_name": mdl_name, "signature": signature})
     cls.__signature__ = pysig
     return cls
 
@@ -785,11 +808,24 @@ def mix_class(py_name: str, mdl_name: str, op: int, color: bool, edf: bool,
     def __init__(self, components):  # noqa: N807
         comps = as_components(components, color, f"df::{mdl_name}")
         base_cls.__init__(self, mix_program(kind, op, comps, color))
+        self.components = comps
+
+    def weights(self, n: int) -> np.ndarray:
+        """(n, k, 3): the effective (normalised or clamped) weights of the components,
+        from the mix's weight kernel."""
+        from render import interpreter
+
+        p = self.program
+        _lane_program(p, n)
+        out = np.empty((n, len(self.components), 3))
+        interpreter.mix_weights_batch(op, p.P, p.code[p.root, BASE], out)
+        return out
 
     doc = (f"``df::{mdl_name}`` over {kind} components: its weights (kernels in its module) "
            "and children, run by :mod:`render.interpreter`.")
-    return type(py_name, (base_cls,), {"__init__": __init__, "__doc__": doc,
-                                       "__module__": module, "mdl_name": mdl_name})
+    return type(py_name, (base_cls,), {"__init__": __init__, "weights": weights,
+                                       "__doc__": doc, "__module__": module,
+                                       "mdl_name": mdl_name})
 
 
 def mix_dispatch(components, bsdf_cls: type, edf_cls: type):

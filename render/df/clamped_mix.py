@@ -29,8 +29,6 @@ from __future__ import annotations
 
 from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
     COMPONENT_WIDTH,
-    MixBsdf,
-    MixEdf,
     bsdf_component,
     mix_signatures,
 )
