@@ -174,7 +174,8 @@ def test_spot_edf_profile_on_a_plane(exponent, spread_deg):
     assert outside.sum() > 20 and np.all(img[outside] == 0.0)
 
 
-def test_spot_light_smoothstep_profile():
+@pytest.mark.parametrize("path", PATHS)
+def test_spot_light_smoothstep_profile(path):
     """The spot light's intensity I smoothstep(cos cutoff, cos beam, cos theta) (pbrt),
     seen on a diffuse floor: E = I(theta) cos(theta)^3 / h^2."""
     I0, rho, h, cutoff, beam = 3.0, 0.8, 1.0, 30.0, 10.0
@@ -182,7 +183,7 @@ def test_spot_light_smoothstep_profile():
     res, ortho = 32, 1.4
     scene = Scene(top_camera(res, 0.5, ortho), [SceneObject(floor(), diffuse(rho))], [spot],
                   RenderSettings(res, res, spp=16, max_depth=2, seed=4))
-    img = render(scene, progress=False).rgb()[..., 1]
+    img = render(scene, progress=False, path=path).rgb()[..., 1]
     x, z = pixel_grid(res, ortho, sub=8)
     cos = h / np.sqrt(x * x + z * z + h * h)
     c0, c1 = math.cos(math.radians(cutoff)), math.cos(math.radians(beam))
