@@ -7,7 +7,7 @@ import subprocess
 import sys
 
 import pytest
-from repo import ROOT
+from repo import ROOT, tree_env
 
 BENCHMARKS = {
     "pwc_speed.py": ["--points", "500", "--positions", "20000"],
@@ -23,7 +23,7 @@ BENCHMARKS = {
 @pytest.mark.parametrize("name", sorted(BENCHMARKS))
 def test_benchmark_runs(name):
     r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / name), *BENCHMARKS[name]],
-                       capture_output=True, text=True, timeout=600, cwd=ROOT)
+                       capture_output=True, text=True, timeout=600, cwd=ROOT, env=tree_env())
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() and "Traceback" not in r.stderr
 

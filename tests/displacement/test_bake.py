@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
+from repo import PWC, ROOT, tree_env
 
 from displacement.bake import (
     angle_between,
@@ -28,7 +28,6 @@ from displacement.state import ShadingState
 from displacement.surfaces import UnitSquare
 from displacement.textures import read_texture
 
-ROOT = Path(__file__).resolve().parents[2]
 A, K, M = 0.02, 3, 2
 
 
@@ -298,7 +297,8 @@ def test_ornament_2_round_trip_away_from_creases():
 
 
 def _pwc(*args, cwd):
-    return subprocess.run(["pwc", "bake", *args], capture_output=True, text=True, cwd=cwd)
+    return subprocess.run([*PWC, "bake", *args], capture_output=True, text=True, cwd=cwd,
+                          env=tree_env())
 
 
 def test_pwc_bake_writes_readable_maps(tmp_path):
@@ -349,7 +349,7 @@ def test_pwc_bake_bad_profile_reports_diagnostics(tmp_path):
 
 
 def test_pwc_bake_help_and_run_function(tmp_path):
-    r = subprocess.run(["pwc", "bake", "--help"], capture_output=True, text=True)
+    r = subprocess.run([*PWC, "bake", "--help"], capture_output=True, text=True, env=tree_env())
     assert r.returncode == 0 and "--normal-map" in r.stdout and "OpenGL" in r.stdout
     from displacement.commands.bake import register
 

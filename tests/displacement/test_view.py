@@ -14,21 +14,19 @@ from __future__ import annotations
 import math
 import os
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image
+from repo import PWC, ROOT, tree_env
 from scipy.ndimage import distance_transform_edt
 
 import pwc
 from displacement import view
 from displacement.camera import Camera
 
-ROOT = Path(__file__).resolve().parents[2]
 PROFILES = ROOT / "profiles"
 SQRT_HALF = math.sqrt(0.5)
 L_SLANT = 0.5 + SQRT_HALF
@@ -568,8 +566,8 @@ def test_curve_vectors_and_normals_are_drawn(slant):
 
 # -------------------------------------------------------------------- CLI
 def _pwc(*args, env=None, cwd=None):
-    return subprocess.run([sys.executable, "-m", "pwc.cli", "view", *map(str, args)],
-                          capture_output=True, text=True, env=env, cwd=cwd, timeout=120)
+    return subprocess.run([*PWC, "view", *map(str, args)],
+                          capture_output=True, text=True, env=tree_env(env), cwd=cwd, timeout=120)
 
 
 def test_cli_help():

@@ -5,10 +5,12 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
+from repo import PWC, ROOT, tree_env
 
 from pwc.emit import from_json, from_npz
 
@@ -16,7 +18,7 @@ SEGMENTS = "0 0\n.7 0\n.7 .4\n3/7 .4\n3/7 4/3\n4/7 1\n"
 
 
 def pwc(*args, cwd=None, stdin=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pwc.cli", *map(str, args)], cwd=cwd,
+    return subprocess.run([*PWC, *map(str, args)], cwd=cwd, env=tree_env(),
                           capture_output=True, input=stdin, timeout=120)
 
 
@@ -139,9 +141,23 @@ def test_info(seg):
     assert "scale       0.75" in out and "x [0, 0.525]  y [0, 1]" in out
 
 
-def test_installed_console_script_runs():
-    r = subprocess.run(["pwc", "--help"], capture_output=True, timeout=60)
+def test_console_script_is_the_module_command():
+    """The installed ``pwc`` script and ``python -m pwc`` call the same ``main``; tests run
+    the latter so that they exercise the tree under test, not the installed one."""
+    script = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]["pwc"]
+    assert script == "pwc.cli:main"
+    r = pwc("--help")
     assert r.returncode == 0 and b"compile" in r.stdout
+
+
+def test_subprocesses_import_the_tree_under_test(tmp_path):
+    code = "import pwc, displacement, render; print(pwc.__file__, displacement.__file__, " \
+           "render.__file__)"
+    r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=tree_env(),
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    for f in r.stdout.split():
+        assert Path(f).is_relative_to(ROOT), f
 
 
 def test_evaluation_matches_between_json_and_compiled(seg, tmp_path):

@@ -1,0 +1,7 @@
+"""``python -m pwc``: the ``pwc`` command of the tree on ``sys.path``."""
+
+import sys
+
+from pwc.cli import main
+
+sys.exit(main())

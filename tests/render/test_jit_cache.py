@@ -1,0 +1,98 @@
+"""The compiled-kernel cache of :mod:`render.jit` never runs stale machine code.
+
+numba's own ``cache=True`` checks only the file that defines a kernel, so a kernel whose
+*callee* (in another file) changed ran the old callee from a warm cache (issue 17: a
+changed ``compiled_df.py`` went unnoticed by every render test).  These tests run probe
+kernels of their own in a copy of the ``render`` package, so they do not depend on the
+renderer's kernels: a caller in one file, its callee in another, a warm cache, then an
+edit of the callee alone.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from repo import ROOT
+
+CALLEE = """\
+from render.jit import njit
+
+
+@njit
+def callee(x):
+    return x + {offset}
+"""
+
+CALLER = """\
+from render._probe_callee import callee
+from render.jit import njit
+
+
+@njit
+def kernel(x):
+    return 2.0 * callee(x)
+"""
+
+RUN = textwrap.dedent("""\
+    import json
+    from render._probe_caller import kernel
+    value = kernel(1.0)
+    print(json.dumps({"value": value, "hits": sum(kernel.stats.cache_hits.values()),
+                      "misses": sum(kernel.stats.cache_misses.values())}))
+""")
+
+
+def _run(tmp_path, pythonpath, env_extra):
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHONPATH": str(pythonpath),
+           "NUMBA_DISABLE_PERFORMANCE_WARNINGS": "1", **env_extra}
+    r = subprocess.run([sys.executable, "-c", RUN], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+@pytest.fixture
+def render_copy(tmp_path):
+    """A copy of the ``render`` package with the probe kernels added (``PYTHONPATH``)."""
+    tree = tmp_path / "tree"
+    shutil.copytree(ROOT / "render", tree / "render",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (tree / "render" / "_probe_callee.py").write_text(CALLEE.format(offset="1.0"))
+    (tree / "render" / "_probe_caller.py").write_text(CALLER)
+    return tree
+
+
+def test_editing_a_called_kernel_changes_the_result_with_a_warm_cache(tmp_path, render_copy):
+    env = {"PWC_CACHE_DIR": str(tmp_path / "cache")}
+    first = _run(tmp_path, render_copy, env)
+    assert first["value"] == 4.0 and first["misses"] == 1  # 2 * (1 + 1), compiled
+    warm = _run(tmp_path, render_copy, env)
+    assert warm["value"] == 4.0 and warm["hits"] == 1  # the cache is really used
+    # edit the callee's file only; the caller's file is untouched
+    (render_copy / "render" / "_probe_callee.py").write_text(CALLEE.format(offset="5.0"))
+    edited = _run(tmp_path, render_copy, env)
+    assert edited["value"] == 12.0  # 2 * (1 + 5): the new callee, no stale code
+    assert edited["hits"] == 0
+
+
+def test_plain_numba_cache_runs_the_stale_callee(tmp_path):
+    """Why :mod:`render.jit` exists: the same probe under numba's own ``cache=True``
+    returns the old callee's result after the edit.  If numba ever tracks callees, this
+    test fails and render.jit's own keying may be dropped."""
+    tree = tmp_path / "plain"
+    (tree / "render").mkdir(parents=True)
+    (tree / "render" / "__init__.py").write_text("")
+    (tree / "render" / "jit.py").write_text(
+        "import numba\n\n\ndef njit(f):\n    return numba.njit(cache=True)(f)\n")
+    (tree / "render" / "_probe_callee.py").write_text(CALLEE.format(offset="1.0"))
+    (tree / "render" / "_probe_caller.py").write_text(CALLER)
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    assert _run(tmp_path, tree, env)["value"] == 4.0
+    (tree / "render" / "_probe_callee.py").write_text(CALLEE.format(offset="5.0"))
+    stale = _run(tmp_path, tree, env)
+    assert stale["hits"] == 1 and stale["value"] == 4.0
