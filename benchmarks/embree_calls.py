@@ -117,28 +117,36 @@ def main(argv=None) -> int:
     ntri = sum(len(f) for _, f in meshes)
     print(f"scene: icosphere {len(meshes[0][1])} triangles + ground quad ({ntri} in all)")
 
-    print("\nBVH build (ms) and rays slipping through the closed sphere, aimed exactly at "
-          "its vertices and edge midpoints:")
+    scene = embree.EmbreeScene(meshes)  # the defaults: quality high, robust
+    all_rays = rays(scene, args.size, np.random.default_rng(1))
+    bo, bd, _ = all_rays["bounce"]
+    blo, bhi = np.zeros(len(bo), np.float32), np.full(len(bo), np.inf, np.float32)
+
+    print("\nBuild quality and robust mode: BVH build, bounce rays (rtcIntersect1, 1 thread),"
+          "\nand rays slipping through the closed sphere aimed exactly at its vertices and edge"
+          " midpoints:")
     closed = trimesh.creation.icosphere(subdivisions=min(args.subdivisions, 5))
     v = np.asarray(closed.vertices, np.float32)
     e = closed.edges_unique
     aim = np.concatenate([v, (v[e[:, 0]] + v[e[:, 1]]) / 2]).astype(np.float32)
+    numba.set_num_threads(1)
     for robust in (False, True):
         for quality in ("low", "medium", "high"):
             t0 = time.perf_counter()
             s = embree.EmbreeScene(meshes, quality=quality, robust=robust)
             build = (time.perf_counter() - t0) * 1e3
+            rate = best_rate(lambda s=s: embree.intersect_rays(s.handle, bo, bd, blo, bhi),
+                             len(bo), args.repeats)
             s.close()
             with embree.EmbreeScene([(v, closed.faces)], quality=quality, robust=robust) as c:
                 leaks = int((c.intersect(np.zeros_like(aim), aim).geom_id < 0).sum())
-            print(f"  robust={robust!s:5}  {quality:6}  build {build:7.1f} ms   "
-                  f"slipped {leaks} of {len(aim)}")
+            print(f"  robust={robust!s:5}  {quality:6}  build {build:7.1f} ms  bounce "
+                  f"{rate:5.2f} M rays/s  slipped {leaks} of {len(aim)}")
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
 
-    scene = embree.EmbreeScene(meshes)  # the defaults: quality high, robust
     ref = rtcore_scene.EmbreeScene()
     for vv, ff in meshes:
         TriangleMesh(ref, vv, ff.astype(np.int32))
-    all_rays = rays(scene, args.size, np.random.default_rng(1))
 
     print("\nM rays/s (best of %d)" % args.repeats)
     print(f"{'rays':8} {'n':>9} {'embreex run':>12} {'rtc*1 x1':>9} {'rtc*1 x2':>9} "
@@ -157,8 +165,8 @@ def main(argv=None) -> int:
         for fn in (single, packets):
             for threads in (1, 2):
                 numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-                row.append(best_rate(lambda fn=fn: fn(scene.handle, o, d, lo, hi), n,
-                                     args.repeats))
+                row.append(best_rate(lambda fn=fn, o=o, d=d, lo=lo, hi=hi:
+                                     fn(scene.handle, o, d, lo, hi), n, args.repeats))
         numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
         print(f"{kind:8} {n:9d} " + " ".join(f"{r:9.2f}" for r in row[:1]) + "   "
               + " ".join(f"{r:9.2f}" for r in row[1:]))

@@ -15,6 +15,7 @@ BENCHMARKS = {
     "dicing.py": ["--quick", "--size", "64", "--samples", "500", "--n-max", "64"],
     "render_vs_mitsuba.py": ["--quick"],
     "bump_vs_displacement.py": ["--quick"],
+    "embree_calls.py": ["--quick"],
 }
 
 
