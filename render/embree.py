@@ -348,7 +348,8 @@ class EmbreeScene:
 
     def occluded(self, origins, directions, tnear=0.0, tfar=np.inf) -> np.ndarray:
         """(n,) bool: whether anything lies on each ray within ``[tnear, tfar]``
-        (single rays: packets of shadow rays measured no faster)."""
+        (single rays: packets of shadow rays measured -20 % to +30 % across runs on
+        this shared machine, no clear gain)."""
         o, d, lo, hi = _rays(origins, directions, tnear, tfar)
         return occluded_rays(self.handle, o, d, lo, hi)
 
