@@ -16,6 +16,7 @@ BENCHMARKS = {
     "render_vs_mitsuba.py": ["--quick"],
     "bump_vs_displacement.py": ["--quick"],
     "glossy_kernels.py": ["--quick"],
+    "embree_calls.py": ["--quick"],
 }
 
 
