@@ -18,8 +18,14 @@ BENCHMARKS = {
 }
 
 
+#: benchmarks that need Mitsuba's LLVM back end (skipped with the reason without it)
+NEEDS_MITSUBA = {"render_vs_mitsuba.py"}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(BENCHMARKS))
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=[pytest.mark.mitsuba] if n in NEEDS_MITSUBA else [])
+    for n in sorted(BENCHMARKS)])
 def test_benchmark_runs(name):
     r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / name), *BENCHMARKS[name]],
                        capture_output=True, text=True, timeout=600, cwd=ROOT)

@@ -22,3 +22,17 @@ def run_pwc(*args, cwd=None, env=None, timeout=600) -> subprocess.CompletedProce
     return subprocess.run([sys.executable, "-m", "pwc", *map(str, args)], cwd=cwd,
                           env=checkout_env(env), capture_output=True, text=True,
                           timeout=timeout)
+
+
+#: the Handbook's text, in the project's shared folder beside the checkout (not part of
+#: the repository: tests that quote the book skip, with this reason, where it is absent)
+HANDBOOK = ROOT.parent / "shared" / "seeds" / "000_da8979e79ecf3d68.txt"
+HANDBOOK_MISSING = (f"the Handbook's text {HANDBOOK.relative_to(ROOT.parent)} is not beside "
+                    "this checkout (../shared/seeds); these tests check quotations against it")
+
+
+def needs_handbook(test):
+    """Skip ``test``, with the reason, where the Handbook's text is absent."""
+    import pytest
+
+    return pytest.mark.skipif(not HANDBOOK.is_file(), reason=HANDBOOK_MISSING)(test)
