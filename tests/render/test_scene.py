@@ -535,3 +535,12 @@ def test_first_compile_notice_only_on_a_cold_cache(tmp_path, monkeypatch, capsys
     _notice_first_compile()
     assert capsys.readouterr().err == ""
 
+
+
+def test_pwc_render_a_bundled_scene_by_name_from_anywhere(tmp_path):
+    r = run_pwc("render", "fig_14_28", "-o", "x.exr", "--spp", "1", "--resolution", "8", "6",
+                cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert read_exr(tmp_path / "x.exr")["RGBA"].shape == (6, 8, 4)
+    r = run_pwc("render", "fig_14_99", "-o", "x.exr", cwd=tmp_path)
+    assert r.returncode == 3 and "cannot read the scene file" in r.stderr
