@@ -19,9 +19,11 @@ import numpy as np
 from pwc import compile_source
 from pwc.curve import Curve, PwType
 from pwc.diagnostics import Diagnostic, PwcError
+from pwc.files import OutputError, ProfileNotFound, prepare_output, resolve_profile
 from pwc.parser import decode_source
 
-__all__ = ["main", "EXIT_OK", "EXIT_ERRORS", "EXIT_USAGE", "EXIT_IO"]
+__all__ = ["main", "version", "add_profiles_option", "EXIT_OK", "EXIT_ERRORS", "EXIT_USAGE",
+           "EXIT_IO"]
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 0, 1, 2, 3
 FORMATS = ("mdl", "json", "npz", "svg", "png")
@@ -35,15 +37,41 @@ class CliError(Exception):
         self.status = status
 
 
-def _load(path: str, normalize: bool) -> tuple[Curve | None, list[Diagnostic]]:
+def version() -> str:
+    """The installed distribution's version (``pwc --version``)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as dist_version
+
+    try:
+        return dist_version("pwc-workbench")
+    except PackageNotFoundError:
+        return "unknown (not installed: run pip install .)"
+
+
+def add_profiles_option(parser: argparse.ArgumentParser) -> None:
+    """Add ``--profiles DIR`` (repeatable) to a command that takes profiles by name."""
+    parser.add_argument(
+        "--profiles", action="append", default=[], metavar="DIR",
+        help="also look for profiles given by name (NAME for NAME.pwc) in DIR, after the "
+             "current folder and before $PWC_PROFILE_PATH and the bundled library; "
+             "repeatable")
+
+
+def find_profile_arg(arg: str, extra=()) -> Path:
+    """A PROFILE argument as a file: the path given, or a profile name on the search path
+    (:mod:`pwc.files`); raises :class:`CliError` (exit 3) when there is neither."""
+    try:
+        return resolve_profile(arg, (".",), extra)
+    except (ProfileNotFound, IsADirectoryError) as e:
+        raise CliError(str(e)) from None
+
+
+def _load(path: str, normalize: bool, extra=()) -> tuple[Curve | None, list[Diagnostic]]:
     """Compile one file; returns (curve or None, diagnostics) and prints nothing."""
-    p = Path(path)
+    p = find_profile_arg(path, extra)
+    path = str(p)
     try:
         data = p.read_bytes()
-    except FileNotFoundError:
-        raise CliError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise CliError(f"{path}: is a directory; give .pwc files (e.g. {path}/*.pwc)") from None
     except OSError as e:
         raise CliError(f"{path}: cannot read: {e.strerror}") from None
     try:
@@ -87,10 +115,10 @@ def _encode(curve: Curve, fmt: str) -> bytes:
 
 def _write(path: Path, data: bytes) -> None:
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
+        prepare_output(path).write_bytes(data)
     except OSError as e:
-        raise CliError(f"{path}: cannot write: {e.strerror}") from None
+        raise CliError(str(e) if isinstance(e, OutputError) else
+                       f"cannot write {path}: {e.strerror or e}") from None
 
 
 def cmd_compile(args) -> int:
@@ -101,7 +129,7 @@ def cmd_compile(args) -> int:
                        "directory (or '-')", EXIT_USAGE)
     failed = False
     for path in args.files:
-        curve, diags = _load(path, not args.no_normalize)
+        curve, diags = _load(path, not args.no_normalize, args.profiles)
         if _report(diags, args.strict) or curve is None:
             failed = True
             continue
@@ -129,7 +157,7 @@ def cmd_compile(args) -> int:
 def cmd_check(args) -> int:
     failed = False
     for path in args.files:
-        curve, diags = _load(path, True)
+        curve, diags = _load(path, True, args.profiles)
         bad = _report(diags, args.strict)
         failed |= bad
         if not bad and curve is not None:
@@ -140,8 +168,9 @@ def cmd_check(args) -> int:
 
 def describe(curve: Curve) -> str:
     """A human-readable summary of a compiled curve (``pwc info``)."""
-    kinds = {k.mdl_name: int(np.sum(curve.type == k)) for k in PwType}
-    kinds = ", ".join(f"{v} {k}" for k, v in kinds.items() if v)
+    # a piece is named by the type of the point it ends at; the first point ends none
+    kinds = {k.mdl_name: int(np.sum(curve.type[1:] == k)) for k in PwType}
+    kinds = ", ".join(f"{v} {k}" for k, v in kinds.items() if v) or "none"
     (x0, y0), (x1, y1) = curve.bbox
     pieces = curve.n - 1
     lines = [
@@ -167,7 +196,7 @@ def describe(curve: Curve) -> str:
 def cmd_info(args) -> int:
     failed = False
     for path in args.files:
-        curve, diags = _load(path, not args.no_normalize)
+        curve, diags = _load(path, not args.no_normalize, args.profiles)
         failed |= _report(diags, False) or curve is None
         if curve is not None:
             print(describe(curve))
@@ -178,9 +207,11 @@ def cmd_catalogue(args) -> int:
     from pwc.catalogue import write_catalogue
 
     try:
-        out = write_catalogue(Path(args.folder))
-    except FileNotFoundError as e:
+        out = write_catalogue(Path(args.folder), force=args.force)
+    except (FileNotFoundError, FileExistsError) as e:
         raise CliError(str(e)) from None
+    except OSError as e:
+        raise CliError(f"cannot write the catalogue: {e.strerror or e}") from None
     except PwcError as e:
         print(e, file=sys.stderr)
         return EXIT_ERRORS
@@ -196,6 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="exit status: 0 ok; 1 errors in the input (or warnings with --strict); "
                "2 bad command line; 3 unreadable/unwritable file or unavailable command. "
                "Run 'pwc COMMAND --help' for each command.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     p = sub.add_parser(
@@ -204,7 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "pw_curve.mdl beside it.",
         epilog="examples: pwc compile profiles/ornament_2.pwc -o out/  |  "
                "pwc compile a.pwc --format json -o -")
-    p.add_argument("files", nargs="+", metavar="FILE", help=".pwc files")
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help=".pwc files, or profile names (ornament_2) on the search path")
     p.add_argument("--format", "-f", choices=FORMATS, default="mdl",
                    help="output format (default: mdl)")
     p.add_argument("-o", "--output", metavar="PATH",
@@ -215,26 +248,33 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keep source units (scale 1) instead of scaling the largest "
                         "coordinate to 1")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors")
+    add_profiles_option(p)
     p.set_defaults(func=cmd_compile)
 
     p = sub.add_parser("check", help="report diagnostics only",
                        description="Parse and compile pwc-lists, print diagnostics, write "
                                    "nothing.")
-    p.add_argument("files", nargs="+", metavar="FILE", help=".pwc files")
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help=".pwc files, or profile names (ornament_2) on the search path")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors")
+    add_profiles_option(p)
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("info", help="pieces, length, bounding box and scale of a curve",
                        description="Describe compiled curves: every pw_point with its type, "
                                    "t, position and radius.")
-    p.add_argument("files", nargs="+", metavar="FILE", help=".pwc files")
+    p.add_argument("files", nargs="+", metavar="FILE",
+                   help=".pwc files, or profile names (ornament_2) on the search path")
     p.add_argument("--no-normalize", action="store_true", help="show source units")
+    add_profiles_option(p)
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("catalogue", help="draw a folder of profiles and write its README.md",
                        description="Write FOLDER/drawings/NAME.svg for every FOLDER/*.pwc and "
                                    "the catalogue page FOLDER/README.md.")
     p.add_argument("folder", nargs="?", default="profiles", help="default: profiles")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite FOLDER/README.md even if pwc catalogue did not write it")
     p.set_defaults(func=cmd_catalogue)
 
     for ep in sorted(entry_points(group="pwc.commands"), key=lambda e: e.name):

@@ -235,10 +235,12 @@ class _Parser:
                 ok = ok and arg is not None
             prop = name
             if is_first:
-                self.error(f"the first point cannot have ':{name}': there is no previous "
-                           "point to join it to", lineno, raw, ptok.start() + 1,
+                self.error(f"':{name}' on the list's first point: ':{name}' shapes the "
+                           f"piece that ends at its point, and line {lineno} holds the first "
+                           "point, which ends no piece", lineno, raw, ptok.start() + 1,
                            args[-1].end() - ptok.start() if args else len(word),
-                           f"remove ':{name}', or add a starting point before this line")
+                           "add the starting point on a line before it (e.g. '0 0'), or "
+                           f"remove ':{name}'")
                 return None
         if not ok:
             return None

@@ -72,12 +72,14 @@ from typing import Any
 
 import numpy as np
 
+from pwc.files import PROFILE_PATH_ENV
 from render.library.functions import FUNCTIONS
 from render.library.resources import (
     ResourceError,
     find_profile,
     load_profile,
     load_texture,
+    profile_dirs,
     profile_names,
     search_paths,
 )
@@ -707,6 +709,15 @@ class _Evaluator:
         if self.callable_kind(node) is not None:
             raise self.error(f"{node.text} must be called", node.offset,
                              f"write {node.text}(...) with its arguments")
+        module = node.parts[-2] if len(node.parts) == 2 else None
+        if module is not None and last in (module, f"{module}_length"):  # NAME::NAME
+            close = difflib.get_close_matches(module, profile_names(), 1)
+            raise self.error(
+                f"no profile {module!r}: there is no {module}.pwc in "
+                f"{', '.join(str(d) for d in profile_dirs())}", node.offset,
+                (f"did you mean {close[0]!r}? or " if close else "")
+                + f"put {module}.pwc beside the scene file, or add its folder with "
+                f"--profiles DIR or ${PROFILE_PATH_ENV}")
         raise self.error(f"unknown name {node.text!r}", node.offset,
                          self.suggest(last, self.all_names()))
 

@@ -79,6 +79,7 @@ from render.lights import (
 
 __all__ = [
     "SceneError",
+    "SceneReadError",
     "RenderSettings",
     "SceneObject",
     "Scene",
@@ -122,6 +123,10 @@ class SceneError(ValueError):
             if self.column:
                 loc += f":{self.column}"
         super().__init__(f"{loc}: {message}")
+
+
+class SceneReadError(SceneError):
+    """The scene file itself cannot be read (missing, a folder, no permission)."""
 
 
 @dataclass
@@ -591,7 +596,7 @@ def _in_multiline_string(text: str, pos: int) -> bool:
     return (before.count('"""') % 2 == 1) or (before.count("'''") % 2 == 1)
 
 
-def load_scene(path, overrides: dict | None = None) -> Scene:
+def load_scene(path, overrides: dict | None = None, profile_dirs=()) -> Scene:
     """Read a TOML scene file.
 
     Parameters
@@ -599,6 +604,9 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     path : str or Path
     overrides : dict, optional
         ``[render]`` settings to replace (``spp``, ``time``, ``seed``...).
+    profile_dirs : paths, optional
+        Folders of profiles named in materials (``myprof::myprof``), searched after the
+        scene's own folder and before ``$PWC_PROFILE_PATH`` and the bundled library.
 
     Returns
     -------
@@ -613,14 +621,20 @@ def load_scene(path, overrides: dict | None = None) -> Scene:
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as e:
-        raise SceneError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
-    return parse_scene(text, str(path), overrides=overrides, base_dir=path.parent)
+        raise SceneReadError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
+    return parse_scene(text, str(path), overrides=overrides, base_dir=path.parent,
+                       profile_dirs=profile_dirs)
 
 
 def parse_scene(
-    text: str, path: str = "<scene>", overrides: dict | None = None, base_dir: Path | None = None
+    text: str, path: str = "<scene>", overrides: dict | None = None, base_dir: Path | None = None,
+    profile_dirs=(),
 ) -> Scene:
     """Parse scene text (see the module docstring for the format).
+
+    Files named in the scene (meshes, textures, profiles) are looked up in ``base_dir``
+    first (the scene file's folder; default: the current folder); profiles then in
+    ``profile_dirs``, ``$PWC_PROFILE_PATH`` and the bundled library.
 
     Examples
     --------
@@ -639,12 +653,13 @@ def parse_scene(
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg)
         raise SceneError(f"TOML syntax error: {msg}", path, line, col) from None
     loc = _Locator(text)
-    return _Parser(data, loc, path, base_dir).scene(overrides or {})
+    return _Parser(data, loc, path, base_dir, profile_dirs).scene(overrides or {})
 
 
 class _Parser:
-    def __init__(self, data: dict, loc: _Locator, path: str, base_dir: Path):
+    def __init__(self, data: dict, loc: _Locator, path: str, base_dir: Path, profile_dirs=()):
         self.data, self.loc, self.path, self.base_dir = data, loc, path, base_dir
+        self.profile_dirs = (base_dir, *(Path(d) for d in profile_dirs))
 
     def error(self, msg: str, section: str, index: int | None = None, key: str | None = None):
         line, col = (
@@ -652,19 +667,22 @@ class _Parser:
         )
         return SceneError(msg, self.path, line, col if line else 0)
 
-    def _check_keys(self, table: dict, allowed: set, section: str, index: int | None = None):
+    def _shape_error(self, section: str, msg: str) -> SceneError:
+        line = self.loc.section(section, None)[0] or self.loc.key("scene", None, section)[0]
+        return SceneError(msg, self.path, line, 1 if line else 0)
+
+    def _check_keys(self, table: dict, allowed: set, section: str, index: int | None = None,
+                    key: str | None = None, note: str = ""):
         for k in table:
             if k not in allowed:
                 import difflib
 
                 close = difflib.get_close_matches(k, sorted(allowed), n=1)
-                hint = (
-                    f" (did you mean {close[0]!r}?)"
-                    if close
-                    else f"; allowed: {', '.join(sorted(allowed))}"
-                )
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
                 where = section if index is None else f"{section}[{index}]"
-                raise self.error(f"{where}: unknown key {k!r}{hint}", section, index, k)
+                raise self.error(
+                    f"{where}: unknown key {k!r}{hint}; allowed: {', '.join(sorted(allowed))}"
+                    f"{note}", section, index, key or k)
 
     def _vec(self, table, key, section, index=None, default=None, size=3, what="numbers"):
         if key not in table:
@@ -718,6 +736,15 @@ class _Parser:
     def scene(self, overrides: dict) -> Scene:
         top = {"camera", "render", "lights", "objects"}
         self._check_keys(self.data, top, "scene")
+        for name in ("camera", "render"):
+            if not isinstance(self.data.get(name, {}), dict):
+                raise self._shape_error(name, f"[{name}] must be a table: write [{name}] on "
+                                              "its own line, then its keys")
+        for name in ("lights", "objects"):
+            v = self.data.get(name, [])
+            if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
+                raise self._shape_error(name, f"{name} must be tables, each under a "
+                                              f"[[{name}]] line (two brackets)")
         settings = self.settings(self.data.get("render", {}), overrides)
         camera = self.camera(self.data.get("camera", {}), settings)
         objects = [self.object(o, i) for i, o in enumerate(self.data.get("objects", []))]
@@ -854,7 +881,7 @@ class _Parser:
         if isinstance(spec, dict):
             params = dict(spec)
             kind = params.pop("type", None)
-            if kind not in SURFACE_TYPES:
+            if not isinstance(kind, str) or kind not in SURFACE_TYPES:
                 raise self.error(
                     f"objects[{i}]: surface type must be one of {', '.join(SURFACE_TYPES)}, "
                     f"got {kind!r}",
@@ -863,6 +890,7 @@ class _Parser:
                     "surface",
                 )
             cls = getattr(surfaces, SURFACE_TYPES[kind])
+            self._surface_params(cls, kind, params, i)
             try:
                 return cls(**params)
             except (TypeError, ValueError) as e:
@@ -875,6 +903,34 @@ class _Parser:
             i,
             "surface",
         )
+
+    def _surface_params(self, cls, kind: str, params: dict, i: int) -> None:
+        """The keys of ``surface = { type = KIND, ... }`` are KIND's parameters, with values
+        of their defaults' kinds (numbers, whole numbers, lists of n numbers)."""
+        import inspect
+
+        sig = inspect.signature(cls).parameters
+        note = ""
+        if "resolution" in params and "resolution" not in sig:
+            note = (" (resolution belongs to the object: write resolution = [nu, nv] in its "
+                    "[[objects]] table, beside surface)")
+        self._check_keys(params, set(sig), "objects", i, "surface", note)
+        where = f"objects[{i}]: surface {kind!r}"
+        for k, v in params.items():
+            default = sig[k].default
+            if isinstance(default, tuple):
+                whole = all(isinstance(x, int) for x in default)
+                ok = isinstance(v, list) and len(v) == len(default) and all(
+                    _is_number(x) and (not whole or isinstance(x, int)) for x in v)
+                want = (f"a list of {len(default)} {'whole ' if whole else ''}numbers, "
+                        f"e.g. {list(default)}")
+            elif isinstance(default, int):
+                ok, want = isinstance(v, int) and not isinstance(v, bool), "a whole number"
+            else:
+                ok, want = _is_number(v), "a number"
+            if not ok:
+                raise self.error(f"{where}: {k} must be {want}, got {v!r}", "objects", i,
+                                 "surface")
 
     def mesh(self, rel: str, i: int):
         import trimesh
@@ -914,7 +970,8 @@ class _Parser:
             )
         line, _ = self.loc.key(section, i, "material")
         try:
-            return compile_material(text, base_dir=self.base_dir)
+            return compile_material(text, base_dir=self.base_dir,
+                                    profile_dirs=self.profile_dirs)
         except SceneError:
             raise
         except Exception as e:
@@ -975,7 +1032,7 @@ class _Parser:
     def light(self, t: dict, i: int):
         kinds = {"point", "spot", "directional", "environment", "sun_and_sky", "quad", "sphere"}
         kind = t.get("type")
-        if kind not in kinds:
+        if not isinstance(kind, str) or kind not in kinds:
             raise self.error(
                 f"lights[{i}]: type must be one of {', '.join(sorted(kinds))}, got {kind!r}",
                 "lights",
@@ -1138,6 +1195,11 @@ class _Parser:
             raise self.error(f"lights[{i}]: {e}", sec, i, key if key in t else None) from None
 
 
+def _is_number(v) -> bool:
+    """A finite TOML number (not a boolean)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
 def _plane_axes(normal: np.ndarray, up: np.ndarray):
     """Orthonormal (axis_u, axis_v, normal) with axis_u x axis_v = normal."""
     n = normal / (np.linalg.norm(normal) or 1.0)
@@ -1152,15 +1214,16 @@ def _plane_axes(normal: np.ndarray, up: np.ndarray):
 
 
 # ---------------------------------------------------------------------------- materials
-def compile_material(text: str, base_dir=None):
+def compile_material(text: str, base_dir=None, profile_dirs=None):
     """An MDL call expression (a Handbook material with arguments) as a material.
 
     Parsed by :func:`render.expr.parse_material` against :data:`render.materials.MATERIALS`;
-    textures are looked up relative to ``base_dir`` (the scene file's folder).
+    textures are looked up relative to ``base_dir`` (the scene file's folder) first, and
+    profiles in ``profile_dirs`` first (:mod:`render.library.resources`).
     """
     from render import expr
 
-    return expr.parse_material(text, base_dir=base_dir)
+    return expr.parse_material(text, base_dir=base_dir, profile_dirs=profile_dirs)
 
 
 def emissive_material(intensity) -> Any:

@@ -1,4 +1,7 @@
-"""Shared fixtures: a seeded rng and the repository root."""
+"""Shared fixtures (a seeded rng and the repository root), and the skips of tests that
+need an optional system library: ``@pytest.mark.mitsuba`` tests run Mitsuba 3's LLVM
+back end and skip, with the reason, where no usable LLVM is installed
+(:mod:`optional_libs`)."""
 
 from __future__ import annotations
 
@@ -6,10 +9,23 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from optional_libs import use_mitsuba_llvm
 from repo import ROOT
 
 # Scripts that write expectations run only by hand, never at collection (issue 17).
 collect_ignore = ["pwc/golden/regenerate.py"]
+
+#: why Mitsuba's tests cannot run here (None: they can); set before mitsuba is imported
+MITSUBA_SKIP = use_mitsuba_llvm()
+
+
+def pytest_collection_modifyitems(config, items):
+    if MITSUBA_SKIP is None:
+        return
+    skip = pytest.mark.skip(reason=MITSUBA_SKIP)
+    for item in items:
+        if item.get_closest_marker("mitsuba") is not None:
+            item.add_marker(skip)
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ import subprocess
 import sys
 
 import pytest
-from repo import ROOT, tree_env
+from repo import ROOT, checkout_env
 
 BENCHMARKS = {
     "pwc_speed.py": ["--points", "500", "--positions", "20000"],
@@ -20,11 +20,17 @@ BENCHMARKS = {
 }
 
 
+#: benchmarks that need Mitsuba's LLVM back end (skipped with the reason without it)
+NEEDS_MITSUBA = {"render_vs_mitsuba.py"}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(BENCHMARKS))
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=[pytest.mark.mitsuba] if n in NEEDS_MITSUBA else [])
+    for n in sorted(BENCHMARKS)])
 def test_benchmark_runs(name):
     r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / name), *BENCHMARKS[name]],
-                       capture_output=True, text=True, timeout=600, cwd=ROOT, env=tree_env())
+                       capture_output=True, text=True, timeout=600, cwd=ROOT, env=checkout_env())
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() and "Traceback" not in r.stderr
 

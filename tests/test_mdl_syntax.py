@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from mdl_syntax import Call, Const, EnumRef, MdlSyntaxError, Param, parse_module
-
-SEED_TEXT = Path("/work/shared/seeds/000_da8979e79ecf3d68.txt")
+from repo import HANDBOOK as SEED_TEXT
+from repo import needs_handbook
 
 LISTING_15_1 = """\
 enum pw_type {
@@ -312,7 +311,7 @@ def _squash(text):
 # -- (a) the Handbook's listings ------------------------------------------------------------------
 
 
-@pytest.mark.skipif(not SEED_TEXT.exists(), reason="Handbook text not available")
+@needs_handbook
 @pytest.mark.parametrize("number", list(LISTINGS))
 def test_fixture_lines_occur_in_the_handbook(number):
     book = _squash(SEED_TEXT.read_text(encoding="utf-8"))
@@ -327,7 +326,7 @@ def _handbook_listing(number):
     return re.search(rf"^Listing {re.escape(number)}\s*```\n(.*?)```", text, re.S | re.M).group(1)
 
 
-@pytest.mark.skipif(not SEED_TEXT.exists(), reason="Handbook text not available")
+@needs_handbook
 @pytest.mark.parametrize("number", ["15.1", "15.6", "15.7", "15.12", "15.19"])
 def test_listings_without_margin_notes_equal_the_handbook(number):
     assert _squash(_handbook_listing(number)) == _squash(LISTINGS[number])

@@ -11,7 +11,12 @@ import argparse
 import sys
 from pathlib import Path
 
-__all__ = ["register"]
+import numpy as np
+
+from pwc.cli import add_profiles_option
+from pwc.files import prepare_output, resolve_profile
+
+__all__ = ["register", "undercut_runs"]
 
 EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 1, 2, 3
 
@@ -47,7 +52,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("profile", metavar="PROFILE.pwc", help="the pwc-list file to bake")
+    p.add_argument("profile", metavar="PROFILE.pwc",
+                   help="the pwc-list to bake: a file, or a name (ornament_2)")
     p.add_argument(
         "--along", choices=("u", "v"), default="v",
         help="texture direction the profile runs along (Listing 15.7 along_u / along_v; "
@@ -82,6 +88,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         "--step", type=float, default=0.25, metavar="TEXELS",
         help="finite-difference step for the displaced normal, in texels (default 0.25)",
     )
+    add_profiles_option(p)
     p.set_defaults(func=_run)
     return p
 
@@ -127,20 +134,21 @@ def _run(args: argparse.Namespace) -> int:
     for path, what in outputs:
         if path:
             bits[what] = _bits_for(Path(path), args.bits, what)
-            if not Path(path).parent.is_dir():
-                raise _fail(f"{what} {path}: directory {Path(path).parent} does not exist",
-                            EXIT_IO)
     if args.vector_map and Path(args.vector_map).suffix.lower() != ".exr":
         raise _fail(f"vector map {args.vector_map}: signed vectors need OpenEXR (.exr)",
                     EXIT_USAGE)
+    try:
+        profile = resolve_profile(args.profile, (".",), args.profiles)
+        for path, what in outputs:
+            if path:
+                prepare_output(path, what)
+    except OSError as e:  # no such profile, or an output that cannot be written
+        raise _fail(str(e), EXIT_IO) from None
 
     import pwc
     from displacement import bake as baking
     from displacement.pwc_fields import displace_with_pwc
 
-    profile = Path(args.profile)
-    if not profile.is_file():
-        raise _fail(f"{profile}: no such file", EXIT_IO)
     try:
         curve = pwc.load(profile)
     except pwc.PwcError as e:
@@ -154,6 +162,8 @@ def _run(args: argparse.Namespace) -> int:
     repeat = "" if args.repeat is None else f", repeat {args.repeat:g}"
     print(f"baked {curve.name}: {args.size}x{args.size} along {args.along}{repeat} "
           f"in {maps.seconds:.2f} s")
+    if args.normal_map or args.height_map:
+        _warn_undercuts(maps.normal, args.along)
     try:
         if args.normal_map:
             path = baking.write_normal_map(args.normal_map, maps.normal, bits["normal map"],
@@ -175,3 +185,45 @@ def _run(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise _fail(str(e), EXIT_USAGE) from None
     return 0
+
+
+def undercut_runs(normal: np.ndarray, along: str) -> list[tuple[int, int]]:
+    """Runs ``(first, last)`` of map rows (``along`` v) or columns (u) where the displaced
+    surface faces into the base surface (tangent-space normal z < 0): undercuts of the
+    profile, which a normal or height map cannot show.
+
+    Examples
+    --------
+    >>> n = np.zeros((5, 2, 3)); n[..., 2] = 1.0; n[1:3, 0, 2] = -0.5; n[4, 1, 2] = -1.0
+    >>> undercut_runs(n, "v")
+    [(1, 2), (4, 4)]
+    """
+    inward = normal[..., 2] < -1e-6  # below rounding: edge-on steps have z = 0 exactly
+    hit = inward.any(axis=1 if along == "v" else 0)
+    idx = np.flatnonzero(hit)
+    if idx.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) > 1)
+    firsts = np.concatenate([idx[:1], idx[breaks + 1]])
+    lasts = np.concatenate([idx[breaks], idx[-1:]])
+    return [(int(a), int(b)) for a, b in zip(firsts, lasts, strict=True)]
+
+
+def _warn_undercuts(normal: np.ndarray, along: str) -> None:
+    runs = undercut_runs(normal, along)
+    if not runs:
+        return
+    size = normal.shape[0] if along == "v" else normal.shape[1]
+    what = "rows" if along == "v" else "columns"
+
+    def coord(i):  # row 0 is the top (v = 1); column 0 is u = 0
+        c = (i + 0.5) / size
+        return 1.0 - c if along == "v" else c
+
+    parts = [f"{a}\u2013{b} ({along} {min(coord(a), coord(b)):.3f}\u2013"
+             f"{max(coord(a), coord(b)):.3f})" if b > a else f"{a} ({along} {coord(a):.3f})"
+             for a, b in runs]
+    print(f"pwc bake: warning: the displaced surface faces into the base surface in {what} "
+          f"{', '.join(parts)}: the profile has undercuts there, which a normal or height "
+          "map cannot show (it can only tilt the surface); render them as true displacement, "
+          "or bake --vector-map", file=sys.stderr)

@@ -7,7 +7,12 @@ import sys
 import time
 from pathlib import Path
 
+from pwc.cli import add_profiles_option
+from pwc.files import prepare_output, resolve_profile
+
 __all__ = ["register"]
+
+EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 1, 2, 3
 
 _DESCRIPTION = """\
 Build a watertight solid for fabrication from a pwc profile and write it as STL, 3MF
@@ -43,7 +48,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("profile", metavar="PROFILE.pwc", help="the profile to build from")
+    parser.add_argument("profile", metavar="PROFILE.pwc",
+                        help="the profile to build from: a file, or a name (ornament_2)")
     shape = parser.add_mutually_exclusive_group(required=True)
     shape.add_argument("--extrude", type=float, metavar="L",
                        help="extrude the cross-section along z over length L")
@@ -61,17 +67,19 @@ def register(subparsers) -> argparse.ArgumentParser:
                         help="added to x before revolving or sweeping (default 0)")
     parser.add_argument("--segments", type=int, default=None, metavar="N",
                         help="circular segments of a --revolve (default: from tolerance)")
+    add_profiles_option(parser)
     parser.set_defaults(func=_run)
     return parser
 
 
-def _fail(message: str) -> int:
+def _fail(message: str, status: int = EXIT_ERRORS) -> int:
     print(f"pwc solid: error: {message}", file=sys.stderr)
-    return 1
+    return status
 
 
 def _run(args: argparse.Namespace) -> int:
-    """Build, export and report; returns the exit status (0 ok, 1 error)."""
+    """Build, export and report; returns the exit status (0 ok, 1 error in the input or a
+    solid that is not watertight, 2 bad command line, 3 unreadable or unwritable file)."""
     import pwc
     from displacement import solids
 
@@ -79,17 +87,21 @@ def _run(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in solids.EXPORT_FORMATS:
         return _fail(
             f"unsupported output type '{out.suffix or '(none)'}' for '{out}'; "
-            f"use one of {', '.join(solids.EXPORT_FORMATS)}"
+            f"use one of {', '.join(solids.EXPORT_FORMATS)}", EXIT_USAGE
         )
-    if not out.parent.is_dir():
-        return _fail(f"cannot write '{out}': folder '{out.parent}' does not exist")
     if args.radius_offset and not (args.revolve or args.sweep):
-        return _fail("--radius-offset applies only to --revolve and --sweep")
+        return _fail("--radius-offset applies only to --revolve and --sweep", EXIT_USAGE)
     if args.segments is not None and not args.revolve:
-        return _fail("--segments applies only to --revolve")
+        return _fail("--segments applies only to --revolve", EXIT_USAGE)
+    try:
+        profile = resolve_profile(args.profile, (".",), args.profiles)
+        sweep = resolve_profile(args.sweep, (".",), args.profiles) if args.sweep else None
+        prepare_output(out)
+    except OSError as e:  # not found, a folder, or an output that cannot be written
+        return _fail(str(e), EXIT_IO)
 
     try:
-        curve = pwc.load(args.profile)
+        curve = pwc.load(profile)
         start = time.perf_counter()
         if args.extrude is not None:
             what = f"extrusion of length {args.extrude:g}"
@@ -98,7 +110,7 @@ def _run(args: argparse.Namespace) -> int:
             what = "revolution"
             solid = solids.revolve(curve, args.tolerance, args.radius_offset, args.segments)
         elif args.sweep:
-            path = pwc.load(args.sweep)
+            path = pwc.load(sweep)
             what = f"sweep along '{path.name}'"
             solid = solids.sweep(curve, path, args.tolerance, args.radius_offset)
         else:
@@ -111,12 +123,8 @@ def _run(args: argparse.Namespace) -> int:
     except pwc.PwcError as e:  # the compiler's own report: file:line:col, caret, fix
         print(str(e), file=sys.stderr)
         return 1
-    except FileNotFoundError as e:
-        return _fail(f"no such file: '{e.filename}'")
-    except IsADirectoryError as e:
-        return _fail(f"'{e.filename}' is a directory, not a file")
     except OSError as e:
-        return _fail(f"cannot read or write '{e.filename}': {e.strerror}")
+        return _fail(f"cannot read or write '{e.filename}': {e.strerror}", EXIT_IO)
     except (ValueError, UnicodeDecodeError) as e:
         return _fail(str(e))
 

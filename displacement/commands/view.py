@@ -14,6 +14,9 @@ import sys
 import time
 from pathlib import Path
 
+from pwc.cli import add_profiles_option
+from pwc.files import prepare_output, resolve_profile
+
 __all__ = ["register"]
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 0, 1, 2, 3
@@ -59,7 +62,7 @@ def register(subparsers) -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("profile", metavar="PROFILE.pwc", nargs="?",
-                   help="the pwc-list file to show")
+                   help="the pwc-list to show: a file, or a name (ornament_2)")
     p.add_argument("--surface", choices=_SURFACES, default="square",
                    help="base surface (default: square, the Handbook's unit square)")
     p.add_argument("--along", nargs="+", default=["v"],
@@ -94,6 +97,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="render off-screen to this image and exit (no window)")
     p.add_argument("--size", type=int, nargs=2, default=(1024, 768), metavar=("W", "H"),
                    help="window or image size in pixels (default 1024 768)")
+    add_profiles_option(p)
     p.set_defaults(func=_run)
     return p
 
@@ -109,14 +113,15 @@ def _has_display() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
-def _load(path: str):
-    """Compile a .pwc file: (curve, None) or (None, exit status) after printing why."""
+def _load(path: str, extra=()):
+    """Compile a .pwc file or named profile: (curve, None) or (None, exit status) after
+    printing why."""
     import pwc
 
-    p = Path(path)
-    if not p.is_file():
-        what = "is a directory" if p.is_dir() else "no such file"
-        return None, _error(f"{path}: {what}", EXIT_IO)
+    try:
+        p = resolve_profile(path, (".",), extra)
+    except OSError as e:
+        return None, _error(str(e), EXIT_IO)
     try:
         return pwc.load(p), None
     except pwc.PwcError as e:
@@ -180,19 +185,20 @@ def _run(args: argparse.Namespace) -> int:
             return _error(f"--screenshot {out}: unsupported image type "
                           f"{out.suffix or '(none)'}; use .png (or .jpg, .bmp, .tif)",
                           EXIT_USAGE)
-        if not out.parent.is_dir():
-            return _error(f"--screenshot {out}: directory {out.parent} does not exist",
-                          EXIT_IO)
+        try:
+            prepare_output(out, "--screenshot")
+        except OSError as e:
+            return _error(str(e), EXIT_IO)
     elif not _has_display():
         return _error("no display to open a window on (DISPLAY is not set); use "
                       "--screenshot OUT.png to render off-screen", EXIT_IO)
 
-    curve, status = _load(args.profile)
+    curve, status = _load(args.profile, args.profiles)
     if curve is None:
         return status
     sweep = None
     if sweep_path is not None:
-        sweep, status = _load(sweep_path)
+        sweep, status = _load(sweep_path, args.profiles)
         if sweep is None:
             return status
 

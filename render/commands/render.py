@@ -12,6 +12,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from pwc.cli import add_profiles_option
+from pwc.files import OutputError, prepare_output
+
 __all__ = ["register", "run"]
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 0, 1, 2, 3
@@ -38,7 +41,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("scene", metavar="SCENE.toml", help="the scene file")
+    p.add_argument("scene", metavar="SCENE.toml",
+                   help="the scene file, or the name of a bundled gallery scene (fig_14_28)")
     p.add_argument(
         "-o", "--output", required=True, metavar="OUT.exr", help="linear RGBA EXR to write"
     )
@@ -68,6 +72,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     p.add_argument("--half", action="store_true", help="write 16-bit half floats")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_profiles_option(p)
     p.set_defaults(func=run)
     return p
 
@@ -81,7 +86,7 @@ def run(args) -> int:
     """Execute ``pwc render`` with parsed arguments; returns the exit status."""
     from render.film import AOVS
     from render.integrator import render
-    from render.scene import SceneError, load_scene
+    from render.scene import SceneError, SceneReadError, load_scene
 
     aovs = [a.strip() for a in args.aov.split(",") if a.strip()]
     for a in aovs:
@@ -107,8 +112,15 @@ def run(args) -> int:
         w, h = args.resolution
         if w < 1 or h < 1:
             return _error(f"--resolution must be positive, got {w} {h}", EXIT_USAGE)
+    try:  # every output is checked before the render starts
+        prepare_output(args.output, "the image")
+        if args.png:
+            prepare_output(args.png, "the --png preview")
+    except OutputError as e:
+        return _error(str(e), EXIT_IO)
     try:
-        scene = load_scene(args.scene, overrides=overrides)
+        scene = load_scene(_scene_file(args.scene), overrides=overrides,
+                           profile_dirs=args.profiles)
         if args.resolution:
             import dataclasses
 
@@ -116,14 +128,20 @@ def run(args) -> int:
             scene.camera = dataclasses.replace(
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
+        if not args.quiet and args.path != "general":
+            _notice_first_compile()
         film = render(
             scene,
             aovs=aovs,
-            progress=not args.quiet,
+            # a bar redrawn with carriage returns only on a terminal, not into a log
+            progress=not args.quiet and sys.stderr.isatty(),
             threads=args.threads,
             denoise=args.denoise,
             path=args.path,
         )
+    except SceneReadError as e:
+        print(str(e), file=sys.stderr)
+        return EXIT_IO
     except SceneError as e:
         print(str(e), file=sys.stderr)
         return EXIT_ERRORS
@@ -135,17 +153,40 @@ def run(args) -> int:
         film.write_exr(args.output, aovs=aovs, half=args.half)
         if args.png:
             film.write_png(args.png)
-    except OSError as e:
-        return _error(f"cannot write the output: {e.strerror or e}", EXIT_IO)
+    except (OSError, RuntimeError) as e:  # OpenEXR reports a failed write as RuntimeError
+        return _error(f"cannot write the output: {getattr(e, 'strerror', None) or e}", EXIT_IO)
     if not args.quiet:
         st = film.stats
         share = st["embree_time_s"] / (args.threads * st["time_s"]) if st["time_s"] else 0.0
         path = st["path"] if st["path"] == "compiled" else f"general: {st['general_reason']}"
+        wrote = f"wrote {Path(args.output)}" + (f" and {Path(args.png)}" if args.png else "")
         print(
-            f"{Path(args.output)}: {film.width}x{film.height}, {st['spp']} spp in "
+            f"{wrote}: {film.width}x{film.height}, {st['spp']} spp in "
             f"{st['time_s']:.2f} s "
             f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {share:.0%} of thread time in "
             f"Embree, {st['triangles']} triangles; {path} path)",
             file=sys.stderr,
         )
     return EXIT_OK
+
+
+def _scene_file(arg: str) -> Path:
+    """The scene file: the path given, else a bundled gallery scene of that name."""
+    from render.library.resources import bundled_scenes
+
+    p = Path(arg)
+    if p.exists() or any(c in arg for c in "/\\"):
+        return p
+    bundled = bundled_scenes() / (arg if arg.endswith(".toml") else f"{arg}.toml")
+    return bundled if bundled.is_file() else p
+
+
+def _notice_first_compile() -> None:
+    """One line before the first render on a machine: the numba kernels compile then
+    (a cold cache is a kernel folder with no index files yet), which takes a while."""
+    from render.jit import cache_dir
+
+    folder = cache_dir()
+    if not (folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None):
+        print("pwc render: compiling render kernels, once per machine (a minute or two; "
+              f"cached in {folder})", file=sys.stderr)

@@ -1,10 +1,14 @@
 """Where materials find their profiles (``profiles/*.pwc``) and textures (``gallery/textures``).
 
 Materials that name a resource (``texture_2d("weave_depth.png")``,
-``ornament_2::ornament_2``) look it up here.  The search paths default to the
-repository's ``profiles/`` and ``gallery/textures/`` and can be changed for a block of
-code with :func:`search_paths` (the expression parser does so with its ``profile_dirs``
-and ``base_dir`` arguments).  Loaded curves and textures are cached by path and
+``ornament_2::ornament_2``) look it up here.  Profiles are searched as everywhere in the
+workbench (:mod:`pwc.files`): the folders given first (a scene's own folder, then
+``--profiles`` folders), ``$PWC_PROFILE_PATH``, then the bundled library; textures in
+the folder given (the scene's) and then the bundled ``gallery/textures``.  The bundled
+folders are package data in an installed package (``render/gallery/...``) and the
+checkout's folders in a source tree.  :func:`search_paths` changes the first folders
+for a block of code (the expression parser does so with its ``profile_dirs`` and
+``base_dir`` arguments).  Loaded curves and textures are cached by path and
 modification time, so a material built many times loads each file once (MDL's
 ``uniform`` values: computed once per render, not per ray).
 """
@@ -25,8 +29,9 @@ from displacement.textures import Texture, read_texture
 __all__ = [
     "ResourceError",
     "ROOT",
-    "DEFAULT_PROFILE_DIRS",
     "DEFAULT_TEXTURE_DIRS",
+    "bundled_scenes",
+    "bundled_textures",
     "search_paths",
     "profile_dirs",
     "texture_dirs",
@@ -38,9 +43,26 @@ __all__ = [
     "INVALID_TEXTURE",
 ]
 
-ROOT = Path(__file__).resolve().parents[2]  # the repository (render/library/..)
-DEFAULT_PROFILE_DIRS: tuple[Path, ...] = (ROOT / "profiles",)
-DEFAULT_TEXTURE_DIRS: tuple[Path, ...] = (ROOT / "gallery" / "textures",)
+ROOT = Path(__file__).resolve().parents[2]  # the checkout, or site-packages when installed
+_PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def _bundled(*parts: str) -> Path:
+    installed = _PACKAGE.joinpath("gallery", *parts)
+    return installed if installed.is_dir() else ROOT.joinpath("gallery", *parts)
+
+
+def bundled_textures() -> Path:
+    """The textures made for the gallery's figures (package data when installed)."""
+    return _bundled("textures")
+
+
+def bundled_scenes() -> Path:
+    """The gallery's scene files (package data when installed)."""
+    return _bundled("scenes")
+
+
+DEFAULT_TEXTURE_DIRS: tuple[Path, ...] = (bundled_textures(),)
 
 #: MDL's ``texture_2d()``: an invalid texture; every lookup returns 0 (MDL spec).
 INVALID_TEXTURE = Texture(np.zeros((1, 1, 3)), name="texture_2d()")
@@ -55,7 +77,7 @@ class ResourceError(ValueError):
 
 
 _Dirs = tuple[Path, ...]
-_PROFILE_DIRS: ContextVar[_Dirs] = ContextVar("profile_dirs", default=DEFAULT_PROFILE_DIRS)
+_PROFILE_DIRS: ContextVar[_Dirs] = ContextVar("profile_dirs", default=())
 _TEXTURE_DIRS: ContextVar[_Dirs] = ContextVar("texture_dirs", default=DEFAULT_TEXTURE_DIRS)
 _CURVES: dict = {}
 _TEXTURES: dict = {}
@@ -69,7 +91,8 @@ def _as_dirs(dirs: Sequence[str | os.PathLike] | str | os.PathLike) -> tuple[Pat
 
 @contextmanager
 def search_paths(profile_dirs=None, texture_dirs=None) -> Iterator[None]:
-    """Search ``profile_dirs`` / ``texture_dirs`` first (then the defaults) inside the block.
+    """Search ``profile_dirs`` / ``texture_dirs`` first (then ``$PWC_PROFILE_PATH`` and the
+    bundled folders) inside the block.
 
     Parameters
     ----------
@@ -77,7 +100,7 @@ def search_paths(profile_dirs=None, texture_dirs=None) -> Iterator[None]:
     """
     tokens = []
     if profile_dirs is not None:
-        dirs = _as_dirs(profile_dirs) + DEFAULT_PROFILE_DIRS
+        dirs = _as_dirs(profile_dirs)
         tokens.append((_PROFILE_DIRS, _PROFILE_DIRS.set(dirs)))
     if texture_dirs is not None:
         dirs = _as_dirs(texture_dirs) + DEFAULT_TEXTURE_DIRS
@@ -90,8 +113,11 @@ def search_paths(profile_dirs=None, texture_dirs=None) -> Iterator[None]:
 
 
 def profile_dirs() -> tuple[Path, ...]:
-    """The directories searched for ``NAME.pwc`` now."""
-    return _PROFILE_DIRS.get()
+    """The directories searched for ``NAME.pwc`` now: those set by :func:`search_paths`,
+    then ``$PWC_PROFILE_PATH``, then the bundled library (:func:`pwc.files.profile_path`)."""
+    from pwc.files import profile_path
+
+    return profile_path(_PROFILE_DIRS.get())
 
 
 def texture_dirs() -> tuple[Path, ...]:
@@ -120,7 +146,7 @@ def find_profile(name: str) -> Path | None:
 
 
 def load_profile(name: str):
-    """The compiled curve ``profiles/NAME.pwc`` (cached).
+    """The compiled curve ``NAME.pwc``, the first on :func:`profile_dirs` (cached).
 
     Raises
     ------

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import subprocess
 
 import numpy as np
 import pytest
-from repo import PWC, ROOT, tree_env
+from repo import run_pwc
 
 from displacement.bake import (
     angle_between,
@@ -297,8 +296,7 @@ def test_ornament_2_round_trip_away_from_creases():
 
 
 def _pwc(*args, cwd):
-    return subprocess.run([*PWC, "bake", *args], capture_output=True, text=True, cwd=cwd,
-                          env=tree_env())
+    return run_pwc("bake", *args, cwd=cwd)
 
 
 def test_pwc_bake_writes_readable_maps(tmp_path):
@@ -323,17 +321,20 @@ def test_pwc_bake_writes_readable_maps(tmp_path):
     "args, status, message",
     [
         (["missing.pwc", "--normal-map", "n.png"], 3, "no such file"),
+        (["ornament2", "--normal-map", "n.png"], 3, "did you mean 'ornament_2'?"),
         (["{profile}"], 2, "nothing to write"),
         (["{profile}", "--normal-map", "n.png", "--bits", "half"], 2, "PNG stores 8 or 16"),
         (["{profile}", "--vector-map", "v.png"], 2, "OpenEXR"),
         (["{profile}", "--normal-map", "n.tif"], 2, "unsupported format"),
-        (["{profile}", "--normal-map", "nodir/n.png"], 3, "does not exist"),
+        (["{profile}", "--normal-map", "afile/n.png"], 3, "afile is a file, not a folder"),
+        (["{profile}", "--normal-map", "/proc/n.png"], 3, "does not accept new files"),
         (["{profile}", "--normal-map", "n.png", "--size", "0"], 2, "--size"),
         (["{profile}", "--normal-map", "n.png", "--repeat", "-1"], 2, "--repeat"),
     ],
 )
 def test_pwc_bake_errors_are_one_line(tmp_path, args, status, message):
     profile = str(ROOT / "profiles" / "ornament_2.pwc")
+    (tmp_path / "afile").write_text("")
     r = _pwc(*[a.format(profile=profile) for a in args], cwd=tmp_path)
     assert r.returncode == status
     assert message in r.stderr
@@ -349,7 +350,7 @@ def test_pwc_bake_bad_profile_reports_diagnostics(tmp_path):
 
 
 def test_pwc_bake_help_and_run_function(tmp_path):
-    r = subprocess.run([*PWC, "bake", "--help"], capture_output=True, text=True, env=tree_env())
+    r = run_pwc("bake", "--help")
     assert r.returncode == 0 and "--normal-map" in r.stdout and "OpenGL" in r.stdout
     from displacement.commands.bake import register
 
@@ -361,3 +362,33 @@ def test_pwc_bake_help_and_run_function(tmp_path):
     )
     assert args.func(args) == 0
     assert read_texture(tmp_path / "h.png").data.shape == (8, 8, 1)
+
+
+def test_pwc_bake_by_name_into_new_folders_warns_of_undercuts(tmp_path):
+    """ornament 2's rows 215-220 (at 512 px) face into the surface: a normal map cannot
+    show that, and bake says so; the torus has no undercut and bakes silently."""
+    r = _pwc("ornament_2", "--normal-map", "maps/deep/n.png", "--size", "512", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "maps" / "deep" / "n.png").is_file()
+    assert "warning" in r.stderr and "rows 215\u2013220 (v 0.569\u20130.579)" in r.stderr
+    assert "undercuts" in r.stderr and "true displacement" in r.stderr
+    r = _pwc("ornament_2", "--along", "u", "--height-map", "h.exr", "--size", "512",
+             cwd=tmp_path)
+    assert r.returncode == 0 and "columns 60 (u 0.118), 291\u2013296" in r.stderr
+    r = _pwc("torus", "--normal-map", "t.png", "--size", "64", cwd=tmp_path)
+    assert r.returncode == 0 and r.stderr == ""
+    r = _pwc("ornament_2", "--vector-map", "v.exr", "--size", "64", cwd=tmp_path)
+    assert r.returncode == 0 and r.stderr == ""  # a vector map shows undercuts
+
+
+def test_undercut_runs_at_the_extremes():
+    from displacement.commands.bake import undercut_runs
+
+    flat = np.zeros((4, 4, 3))
+    flat[..., 2] = 1.0
+    assert undercut_runs(flat, "v") == [] and undercut_runs(flat, "u") == []
+    edge_on = flat.copy()
+    edge_on[..., 2] = 0.0  # a vertical step: seen edge-on, not an undercut
+    assert undercut_runs(edge_on, "v") == []
+    inward = -flat
+    assert undercut_runs(inward, "v") == [(0, 3)] and undercut_runs(inward, "u") == [(0, 3)]

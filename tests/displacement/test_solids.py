@@ -632,28 +632,43 @@ def test_cli_builds_and_reports(tmp_path, capsys, shape):
 
 
 @pytest.mark.parametrize(
-    "argv, message",
+    "argv, status, message",
     [
-        (["nowhere.pwc", "--revolve", "-o", "{tmp}/a.stl"], "no such file: 'nowhere.pwc'"),
-        (["{profiles}/torus.pwc", "--revolve", "-o", "{tmp}/a.step"],
+        (["nowhere.pwc", "--revolve", "-o", "{tmp}/a.stl"], 3, "nowhere.pwc: no such file"),
+        (["toros", "--revolve", "-o", "{tmp}/a.stl"], 3, "did you mean 'torus'?"),
+        (["{profiles}/torus.pwc", "--revolve", "-o", "{tmp}/a.step"], 2,
          "unsupported output type '.step'"),
-        (["{profiles}/torus.pwc", "--revolve", "-o", "{tmp}/none/a.stl"], "does not exist"),
-        (["{profiles}/doric_flutes.pwc", "--revolve", "-o", "{tmp}/a.stl"], "behind the axis"),
-        (["{profiles}/torus.pwc", "--frame", "1", "1", "-o", "{tmp}/a.stl"], "twice the band"),
-        (["{profiles}/torus.pwc", "--extrude", "2", "--radius-offset", "1", "-o", "{tmp}/a.stl"],
-         "--radius-offset applies only"),
-        (["{profiles}/torus.pwc", "--revolve", "--tolerance", "0", "-o", "{tmp}/a.stl"],
+        (["torus", "--revolve", "-o", "{tmp}/a.ply"], 2, "unsupported output type '.ply'"),
+        (["{profiles}/torus.pwc", "--revolve", "-o", "{tmp}/afile/a.stl"], 3,
+         "afile is a file, not a folder"),
+        (["torus", "--revolve", "-o", "/proc/a.stl"], 3, "does not accept new files"),
+        (["{profiles}/doric_flutes.pwc", "--revolve", "-o", "{tmp}/a.stl"], 1,
+         "behind the axis"),
+        (["{profiles}/torus.pwc", "--frame", "1", "1", "-o", "{tmp}/a.stl"], 1,
+         "twice the band"),
+        (["{profiles}/torus.pwc", "--extrude", "2", "--radius-offset", "1", "-o",
+          "{tmp}/a.stl"], 2, "--radius-offset applies only"),
+        (["{profiles}/torus.pwc", "--revolve", "--tolerance", "0", "-o", "{tmp}/a.stl"], 1,
          "tolerance must be a positive"),
-        (["{profiles}", "--revolve", "-o", "{tmp}/a.stl"], "is a directory"),
+        (["{profiles}", "--revolve", "-o", "{tmp}/a.stl"], 3, "is a directory"),
     ],
 )
-def test_cli_errors_are_one_line(tmp_path, capsys, argv, message):
+def test_cli_errors_are_one_line(tmp_path, capsys, argv, status, message):
+    (tmp_path / "afile").write_text("")
     argv = [a.format(tmp=tmp_path, profiles=PROFILES) for a in argv]
-    assert run_cli(*argv) == 1
+    assert run_cli(*argv) == status
     err = capsys.readouterr().err
     assert message in err
     assert err.startswith("pwc solid: error: ") and err.count("\n") == 1
     assert "Traceback" not in err
+
+
+def test_cli_creates_the_output_folder_and_takes_names(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "newdir" / "x.stl"
+    assert run_cli("torus", "--revolve", "-o", out) == 0
+    assert trimesh.load(out, force="mesh").is_watertight
+    assert "of 'torus'" in capsys.readouterr().out
 
 
 def test_cli_prints_compiler_errors(tmp_path, capsys):

@@ -20,7 +20,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image
-from repo import PWC, ROOT, tree_env
+from repo import PWC, ROOT, checkout_env
 from scipy.ndimage import distance_transform_edt
 
 import pwc
@@ -567,7 +567,7 @@ def test_curve_vectors_and_normals_are_drawn(slant):
 # -------------------------------------------------------------------- CLI
 def _pwc(*args, env=None, cwd=None):
     return subprocess.run([*PWC, "view", *map(str, args)],
-                          capture_output=True, text=True, env=tree_env(env), cwd=cwd, timeout=120)
+                          capture_output=True, text=True, env=checkout_env(env), cwd=cwd, timeout=120)
 
 
 def test_cli_help():
@@ -631,7 +631,8 @@ def test_cli_errors_are_one_line(tmp_path):
         ((profile, "--dicing-rate", "nan", "--screenshot", out), 2, "--dicing-rate"),
         ((profile, "--size", "8", "8", "--screenshot", out), 2, "--size"),
         ((profile, "--screenshot", tmp_path / "x.gif"), 2, "unsupported image type"),
-        ((profile, "--screenshot", tmp_path / "no" / "x.png"), 3, "does not exist"),
+        ((profile, "--screenshot", bad / "x.png"), 3, "bad.pwc is a file, not a folder"),
+        (("ornament2", "--screenshot", out), 3, "did you mean 'ornament_2'?"),
         ((profile,), 3, "no display"),
         (("--screenshot", out), 2, "give the profile"),
         ((profile, "--along", "double", tmp_path / "nope.pwc", "--screenshot", out), 3,
@@ -666,3 +667,13 @@ def _main_captured(main, argv):
         except SystemExit as e:
             code = e.code
     return code, err.getvalue()
+
+
+def test_cli_screenshot_by_name_into_a_new_folder(tmp_path):
+    from pwc.cli import main
+
+    out = tmp_path / "new" / "folder" / "o.png"
+    code, err = _main_captured(main, ["view", "ornament_2", "--screenshot", str(out),
+                                      "--size", "64", "48"])
+    assert code == 0, err
+    assert np.asarray(Image.open(out)).shape[:2] == (48, 64)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -10,15 +12,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from repo import PWC, ROOT, tree_env
+from repo import PROFILES, PWC, ROOT, checkout_env
 
+from pwc import load as lib_load
 from pwc.emit import from_json, from_npz
 
 SEGMENTS = "0 0\n.7 0\n.7 .4\n3/7 .4\n3/7 4/3\n4/7 1\n"
 
 
+#: this checkout first on the path, whatever the current folder of the command
+ENV = checkout_env()
+
+
 def pwc(*args, cwd=None, stdin=None) -> subprocess.CompletedProcess:
-    return subprocess.run([*PWC, *map(str, args)], cwd=cwd, env=tree_env(),
+    return subprocess.run([*PWC, *map(str, args)], cwd=cwd, env=checkout_env(),
                           capture_output=True, input=stdin, timeout=120)
 
 
@@ -137,7 +144,8 @@ def test_info(seg):
     r = pwc("info", seg)
     out = r.stdout.decode()
     assert r.returncode == 0
-    assert "length      2.00056333" in out and "6 segment" in out and "closed      no" in out
+    assert "length      2.00056333" in out and "(5 pieces: 5 segment ending" in out
+    assert "closed      no" in out
     assert "scale       0.75" in out and "x [0, 0.525]  y [0, 1]" in out
 
 
@@ -153,7 +161,7 @@ def test_console_script_is_the_module_command():
 def test_subprocesses_import_the_tree_under_test(tmp_path):
     code = "import pwc, displacement, render; print(pwc.__file__, displacement.__file__, " \
            "render.__file__)"
-    r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=tree_env(),
+    r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env(),
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     for f in r.stdout.split():
@@ -167,3 +175,77 @@ def test_evaluation_matches_between_json_and_compiled(seg, tmp_path):
     c = from_json(r.stdout.decode())
     s = np.linspace(0, 1, 101)
     np.testing.assert_array_equal(c.evaluate(s), lib.load(seg).evaluate(s))
+
+
+@pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
+def test_info_piece_counts_add_up(path):
+    from pwc.cli import describe
+
+    line = next(x for x in describe(lib_load(path)).splitlines() if x.startswith("pw_points"))
+    m = re.search(r"(\d+) pw_points? \((\d+) pieces: (.*) ending at them\)", line) or \
+        re.search(r"pw_points\s+(\d+) \((\d+) pieces: (.*) ending at them\)", line)
+    n, pieces, kinds = int(m.group(1)), int(m.group(2)), m.group(3)
+    assert pieces == n - 1
+    assert sum(int(k.split()[0]) for k in kinds.split(", ")) == pieces, line
+
+
+def test_version_and_python_dash_m(seg):
+    r = subprocess.run([sys.executable, "-m", "pwc", "--version"], capture_output=True,
+                       timeout=120)
+    assert r.returncode == 0 and re.fullmatch(rb"pwc \d+\.\d+\.\d+\S*\n", r.stdout), r
+    r = subprocess.run([sys.executable, "-m", "pwc", "check", seg], capture_output=True,
+                       timeout=120)
+    assert r.returncode == 0 and b"ok (6 pw_points" in r.stdout
+
+
+def test_profiles_by_name_search_order(tmp_path, monkeypatch):
+    """The current folder, then --profiles, then $PWC_PROFILE_PATH, then the bundle."""
+    here, opt, env = (tmp_path / d for d in ("here", "opt", "env"))
+    for d, y in ((here, 1), (opt, 2), (env, 3)):
+        d.mkdir()
+        (d / "ornament_2.pwc").write_text(f"0 0\n0 {y}\n")
+        (d / f"only_{d.name}.pwc").write_text(f"0 0\n1 {y}\n")
+    envvar = {**ENV, "PWC_PROFILE_PATH": os.pathsep.join([str(env), "/nonexistent"])}
+
+    def source(name, *extra, cwd=here):
+        r = subprocess.run([sys.executable, "-m", "pwc", "info", name, *extra], cwd=cwd,
+                           env=envvar, capture_output=True, timeout=120)
+        _clean(r)
+        assert r.returncode == 0, r.stderr.decode()
+        return r.stdout.decode().splitlines()[1].split(None, 1)[1]
+
+    assert source("ornament_2", "--profiles", opt) == "ornament_2.pwc"  # cwd first
+    assert source("ornament_2", "--profiles", opt, cwd=tmp_path) == str(opt / "ornament_2.pwc")
+    assert source("ornament_2", cwd=tmp_path) == str(env / "ornament_2.pwc")
+    assert source("only_opt.pwc", "--profiles", opt, cwd=tmp_path) == str(opt / "only_opt.pwc")
+    bundled = source("torus", cwd=tmp_path)
+    assert bundled.endswith("torus.pwc") and Path(bundled).is_file()
+    r = subprocess.run([sys.executable, "-m", "pwc", "check", "ornament2"], cwd=tmp_path,
+                       capture_output=True, timeout=120, env=ENV)
+    _clean(r)
+    assert r.returncode == 3 and b"did you mean 'ornament_2'?" in r.stderr
+
+
+def test_output_paths_one_rule(seg, tmp_path):
+    r = pwc("compile", seg, "-o", tmp_path / "new" / "deeper" / "x.json", "-f", "json")
+    assert r.returncode == 0 and (tmp_path / "new" / "deeper" / "x.json").is_file()
+    (tmp_path / "file").write_text("")
+    r = pwc("compile", seg, "-o", tmp_path / "file" / "x.json", "-f", "json")
+    _clean(r)
+    assert r.returncode == 3 and b"file is a file, not a folder" in r.stderr
+    r = pwc("compile", seg, "-o", "/proc/x.json", "-f", "json")
+    _clean(r)
+    assert r.returncode == 3 and b"does not accept new files" in r.stderr
+
+
+def test_catalogue_keeps_a_readme_it_did_not_write(tmp_path):
+    (tmp_path / "seg.pwc").write_text("# a segment\n" + SEGMENTS)
+    mine = tmp_path / "README.md"
+    mine.write_text("# my notes\n")
+    r = pwc("catalogue", tmp_path)
+    _clean(r)
+    assert r.returncode == 3 and b"not written by pwc catalogue" in r.stderr
+    assert mine.read_text() == "# my notes\n"
+    assert pwc("catalogue", tmp_path, "--force").returncode == 0
+    assert "Generated by `pwc catalogue" in mine.read_text()
+    assert pwc("catalogue", tmp_path).returncode == 0  # its own page: rewritten freely

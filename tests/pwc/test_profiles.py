@@ -10,13 +10,12 @@ import re
 
 import numpy as np
 import pytest
-from repo import PROFILES, ROOT
+from repo import HANDBOOK, PROFILES, ROOT, needs_handbook
 
 import pwc
 from pwc.catalogue import catalogue_markdown, description
 from pwc.parser import parse
 
-HANDBOOK = ROOT.parent / "shared" / "seeds" / "000_da8979e79ecf3d68.txt"
 GOLDEN = ROOT / "tests" / "pwc" / "golden"
 
 
@@ -45,6 +44,7 @@ def _printed_list(after: str) -> str:
     return block.group(1)
 
 
+@needs_handbook
 @pytest.mark.parametrize(("name", "after"), [
     ("ornament_2", "encodes the second diagram from Plate XXIX"),
     ("corinthian", "the Corinthian impost also uses the `:flare` element"),

@@ -475,7 +475,7 @@ MALFORMED = [
     ('glossy(tint: color("a"))', 1, 20, '"a"', "components must be numbers, got a string", None),
     ("color(0.5)", 1, 1, "color", "the expression is a color, not a material", None),
     ("radial_pwc(ornament_3::ornament_3, glossy())", 1, 12, "ornament_3",
-     "unknown name 'ornament_3::ornament_3'", "did you mean 'ornament_"),
+     "no profile 'ornament_3': there is no ornament_3.pwc in", "did you mean 'ornament_"),
     ("radial_pwc(corinthian::corinthian, glossy(), along_w)", 1, 46, "along_w",
      "unknown name 'along_w'", "did you mean 'along_"),
     ('marbloid(space: "texture")', 1, 17, '"texture"', "must be a mapping_mode, got 'texture'",

@@ -3,8 +3,11 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from repo import run_pwc
 
 from pwc.cli import main
 from render.film import read_exr
@@ -328,7 +331,7 @@ def test_pwc_render_errors_are_messages_not_tracebacks(tmp_path, capsys):
     assert "must be an .exr" in capsys.readouterr().err
     assert main(["render", str(bad), "-o", str(tmp_path / "x.exr"), "--aov", "colour"]) == 2
     assert "unknown AOV 'colour'" in capsys.readouterr().err
-    assert main(["render", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.exr")]) == 1
+    assert main(["render", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.exr")]) == 3
     assert "cannot read the scene file" in capsys.readouterr().err
 
 
@@ -337,3 +340,207 @@ def test_python_api_render_from_path(tmp_path):
     film = render(tmp_path / "stage.toml", spp=1, progress=False)
     assert film.rgb().shape == (24, 32, 3) and film.stats["spp"] == 1
     assert isinstance(load_scene(tmp_path / "stage.toml"), Scene)
+
+
+# every kind of table a scene has, to put wrong values into
+ALL_KINDS = STAGE + """
+[[lights]]
+type = "point"
+position = [0.0, 2.0, 0.0]
+intensity = 2.0
+
+[[lights]]
+type = "spot"
+position = [0.0, 2.0, 0.0]
+look_at = [0.0, 0.0, 0.0]
+cutoff_angle = 30.0
+
+[[lights]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+
+[[lights]]
+type = "sphere"
+center = [1.0, 2.0, 0.0]
+radius = 0.2
+intensity = 3.0
+
+[[objects]]
+surface = { type = "torus", major = 0.5, minor = 0.1 }
+material = "diffuse()"
+scale = [1.0, 1.0, 1.0]
+resolution = [16, 8]
+"""
+
+WRONG_VALUES = [[], {}, "x", True, -1, 1e400, [[1]], ["a", "b", "c"]]
+
+
+def _tables(data):
+    for section, value in data.items():
+        if isinstance(value, dict):
+            yield section, None, value
+        else:
+            for i, t in enumerate(value):
+                yield section, i, t
+
+
+@pytest.mark.parametrize("wrong", WRONG_VALUES, ids=repr)
+def test_any_wrong_value_is_a_scene_error_not_a_python_one(wrong):
+    """Every key of every table, set to a value of the wrong type or range: the answer is
+    a SceneError naming the file and line (or the scene parses), never another exception."""
+    import tomllib
+
+    data = tomllib.loads(ALL_KINDS)
+    assert parse_scene(ALL_KINDS, "s.toml")
+    tried = 0
+    for section, i, table in list(_tables(data)):
+        for key in list(table):
+            case = tomllib.loads(ALL_KINDS)
+            target = case[section] if i is None else case[section][i]
+            target[key] = wrong
+            text = _dumps(case)
+            try:
+                parse_scene(text, "s.toml")
+            except SceneError as e:
+                assert str(e).startswith("s.toml:"), str(e)
+            tried += 1
+    assert tried > 30
+    # whole sections of the wrong kind
+    for section, value in (("lights", {"type": "point"}), ("objects", 3), ("camera", [1]),
+                           ("render", "fast"), ("lights", [1])):
+        case = tomllib.loads(ALL_KINDS)
+        case[section] = value
+        with pytest.raises(SceneError):
+            parse_scene(_dumps(case), "s.toml")
+
+
+def _dumps(data) -> str:
+    """A tiny TOML writer for the tests' dicts (tables, arrays of tables, values)."""
+    import json
+
+    def value(v):
+        if isinstance(v, dict):
+            return "{ " + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + " }"
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, float) and not np.isfinite(v):
+            return "inf" if v > 0 else "-inf"
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return json.dumps(v)
+
+    out = []
+    for section, v in data.items():
+        if isinstance(v, dict):
+            out.append(f"[{section}]")
+            out += [f"{k} = {value(x)}" for k, x in v.items()]
+        elif isinstance(v, list) and all(isinstance(t, dict) for t in v) and v:
+            for t in v:
+                out.append(f"[[{section}]]")
+                out += [f"{k} = {value(x)}" for k, x in t.items()]
+        else:
+            out.insert(0, f"{section} = {value(v)}")
+    return "\n".join(out) + "\n"
+
+
+def test_surface_keys_and_types_are_named_with_the_fix():
+    e = _err(STAGE.replace("radius = 0.5 }", "radius = 0.5, resolution = [256, 128] }"))
+    assert "objects[1]: unknown key 'resolution'; allowed: radius" in e.message
+    assert "resolution belongs to the object" in e.message and "[[objects]]" in e.message
+    assert e.line == STAGE.splitlines().index(
+        'surface = { type = "sphere", radius = 0.5 }') + 1
+    e = _err(STAGE.replace("radius = 0.5 }", "radus = 0.5 }"))
+    assert "unknown key 'radus' (did you mean 'radius'?); allowed: radius" in e.message
+    e = _err(STAGE.replace("radius = 0.5 }", 'radius = "big" }'))
+    assert "surface 'sphere': radius must be a number, got 'big'" in e.message
+    e = _err(STAGE.replace('{ type = "sphere", radius = 0.5 }',
+                           '{ type = "plane", size = [1, 2, 3] }'))
+    assert "size must be a list of 2 numbers, e.g. [1.0, 1.0]" in e.message
+    e = _err(STAGE.replace('type = "quad"', "type = []"))
+    assert "lights[0]: type must be one of" in e.message and "got []" in e.message
+    e = _err(STAGE.replace("[camera]", "[[camera]]"))
+    assert "[camera] must be a table" in e.message and e.line == 1
+    e = _err('[lights]\ntype = "point"\nposition = [0, 1, 0]\n\n'
+             '[[objects]]\nsurface = "square"\nmaterial = "diffuse()"\n')
+    assert "lights must be tables, each under a [[lights]] line" in e.message
+    assert e.line == 1
+
+
+def _own_profile_scene(folder, profile_name="myprof"):
+    folder.mkdir(parents=True, exist_ok=True)
+    scene = folder / "own.toml"
+    scene.write_text(STAGE.replace(
+        "glossy(tint: color(0.6, 0.4, 0.0))",
+        f"radial_pwc(pwc: {profile_name}::{profile_name}, surface_material: diffuse())"))
+    return scene
+
+
+def test_profiles_named_in_a_scene_are_searched_beside_it_first(tmp_path, monkeypatch):
+    scene = _own_profile_scene(tmp_path / "scenes")
+    with pytest.raises(SceneError, match="no profile 'myprof'"):
+        load_scene(scene)
+    (tmp_path / "scenes" / "myprof.pwc").write_text("0 0\n.1 .5 :sag .05\n0 1\n")
+    assert load_scene(scene).objects[1].material is not None
+    # --profiles / $PWC_PROFILE_PATH for a profile kept elsewhere
+    other = tmp_path / "lib"
+    other.mkdir()
+    (tmp_path / "scenes" / "myprof.pwc").rename(other / "myprof.pwc")
+    assert load_scene(scene, profile_dirs=[other]).objects[1].material is not None
+    monkeypatch.setenv("PWC_PROFILE_PATH", f"/nonexistent{os.pathsep}{other}")
+    assert load_scene(scene).objects[1].material is not None
+
+
+def test_pwc_render_own_profile_outputs_checked_first_and_summary(tmp_path):
+    """The command: a profile beside the scene, --profiles, a new output folder, the
+    summary naming the PNG, no carriage-return progress in a log, and an unwritable
+    output refused before a render that would take hours."""
+    scene = _own_profile_scene(tmp_path / "s")
+    (tmp_path / "s" / "myprof.pwc").write_text("0 0\n.1 .5 :sag .05\n0 1\n")
+    out = tmp_path / "new" / "dir"
+    r = run_pwc("render", scene, "-o", out / "a.exr", "--png", out / "a.png", "--spp", "1")
+    assert r.returncode == 0, r.stderr
+    assert (out / "a.exr").is_file() and (out / "a.png").is_file()
+    assert f"wrote {out / 'a.exr'} and {out / 'a.png'}: 32x24, 1 spp" in r.stderr
+    assert "\r" not in r.stderr and "Traceback" not in r.stderr
+    from render.jit import cache_dir  # the render cached its kernels as the notice expects
+
+    assert next(cache_dir().rglob("*.nbi"), None) is not None
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (tmp_path / "s" / "myprof.pwc").rename(lib / "myprof.pwc")
+    r = run_pwc("render", scene, "-o", out / "b.exr", "--spp", "1", "--quiet")
+    assert r.returncode == 1 and "no profile 'myprof'" in r.stderr
+    r = run_pwc("render", scene, "-o", out / "b.exr", "--spp", "1", "--profiles", lib)
+    assert r.returncode == 0, r.stderr
+    for bad, why in (("/proc/x.exr", "does not accept new files"),
+                     (f"{scene}/x.exr", "own.toml is a file, not a folder")):
+        r = run_pwc("render", scene, "-o", bad, "--spp", "1000000", "--profiles", lib,
+                    timeout=120)
+        assert r.returncode == 3 and why in r.stderr and "Traceback" not in r.stderr
+        assert len(r.stderr.strip().splitlines()) == 1
+    r = run_pwc("render", tmp_path / "missing.toml", "-o", out / "c.exr")
+    assert r.returncode == 3 and "cannot read the scene file" in r.stderr
+
+
+def test_first_compile_notice_only_on_a_cold_cache(tmp_path, monkeypatch, capsys):
+    from render.commands.render import _notice_first_compile
+    from render.jit import cache_dir
+
+    monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
+    _notice_first_compile()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "compiling render kernels, once per machine" in err
+    (cache_dir() / "compiled").mkdir(parents=True)
+    (cache_dir() / "compiled" / "kernel-12.py311.nbi").write_bytes(b"")
+    _notice_first_compile()
+    assert capsys.readouterr().err == ""
+
+
+
+def test_pwc_render_a_bundled_scene_by_name_from_anywhere(tmp_path):
+    r = run_pwc("render", "fig_14_28", "-o", "x.exr", "--spp", "1", "--resolution", "8", "6",
+                cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert read_exr(tmp_path / "x.exr")["RGBA"].shape == (6, 8, 4)
+    r = run_pwc("render", "fig_14_99", "-o", "x.exr", cwd=tmp_path)
+    assert r.returncode == 3 and "cannot read the scene file" in r.stderr
