@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 import pytest
-from repo import run_pwc
+from repo import ROOT, run_pwc
 
 from displacement.bake import (
     angle_between,

@@ -566,8 +566,8 @@ def test_curve_vectors_and_normals_are_drawn(slant):
 
 # -------------------------------------------------------------------- CLI
 def _pwc(*args, env=None, cwd=None):
-    return subprocess.run([*PWC, "view", *map(str, args)],
-                          capture_output=True, text=True, env=checkout_env(env), cwd=cwd, timeout=120)
+    return subprocess.run([*PWC, "view", *map(str, args)], capture_output=True, text=True,
+                          env=checkout_env(env), cwd=cwd, timeout=120)
 
 
 def test_cli_help():

@@ -18,9 +18,9 @@ from render_df_cases import (
 
 from render.df import backscattering_glossy_reflection_bsdf as backscatter
 from render.df.backscattering_glossy_reflection_bsdf import _k_p_disk
+from render.testing import direction, sample_lanes
 
 _p_disk = np.vectorize(_k_p_disk)  # the kernel, over arrays
-from render.testing import direction, sample_lanes
 
 TAB, TAB_ANISO = 3e-3, 1e-2
 

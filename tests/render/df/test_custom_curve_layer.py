@@ -44,13 +44,14 @@ from render.df import (
 )
 from render.df._layer import f82_curve1
 
+from render.testing import direction, furnace
+
 
 def f82_curve(c, r0, r90, f82, p):
     """The kernel's curve per channel over cosines ``c`` (n,) -> (n, 3)."""
     f = np.vectorize(f82_curve1)
     r0, r90, f82 = (np.broadcast_to(x, (1, 3))[0] for x in (r0, r90, f82))
     return np.stack([f(c, r0[k], r90[k], f82[k], p) for k in range(3)], axis=1)
-from render.testing import direction, furnace
 
 D, T, G, S = diffuse_reflection_bsdf, diffuse_transmission_bsdf, simple_glossy_bsdf, specular_bsdf
 TOL = COMBINED_ALBEDO_TOL
