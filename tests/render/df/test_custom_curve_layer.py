@@ -43,7 +43,6 @@ from render.df import (
     weighted_layer,
 )
 from render.df._layer import f82_curve1
-
 from render.testing import direction, furnace
 
 
