@@ -1,17 +1,17 @@
-"""The integrator's compiled path: the same path tracer in numba loops, for simple scenes.
+"""The integrator's compiled path: the path tracer's bounce in numba loops.
 
 The general integrator (:mod:`render.integrator`) shades a wavefront with numpy passes
-over a material tree; on the Handbook stage almost all of its time goes to those passes
-and not to Embree.  :class:`CompiledTrace` runs each bounce as one compiled loop over
-the lanes instead, where the scene allows it (:func:`compiled_reason`): every material's
-bsdf is one elemental df the kernels model (:func:`render.compiled_df.covers`), with
-constant arguments or arguments that vary over the surface, perhaps a bumped normal and
-constant ``diffuse_edf`` emission; no volume, cutout, thin-walled backface or null
-interface; the lights are emissive objects, point, spot and directional lights and an
-environment (constant or a latitude-longitude map).
-Varying arguments and normals are evaluated by ``material.shade`` (numpy) per object
-and bounce, and the kernels take them per lane; AOVs are written from the general
-path's own shading of the camera rays' hits.
+per object; :class:`CompiledTrace` runs each bounce as one compiled loop over the lanes
+instead, where the scene allows it (:func:`compiled_reason`): no volume, cutout,
+thin-walled backface or null interface; emission a constant ``diffuse_edf``; lights
+that are emissive objects, point, spot and directional lights and an environment
+(constant or a latitude-longitude map).  Every bsdf qualifies: each object's df tree is
+a program (:mod:`render.program`) that :mod:`render.interpreter` runs per lane, the
+same kernels the general path calls in batches.  Objects whose arguments vary over the
+surface (textures, noise, a bumped normal, an explicit ``tangent_u`` or layer
+``normal``) are bound per segment by ``material.shade`` (numpy) and their programs'
+parameter rows go to the kernel per lane; AOVs are written from the general path's own
+shading of the camera rays' hits.
 
 It is the same algorithm, lane for lane: the same random numbers drawn in the same
 order, the same light choice, MIS weights, Russian roulette, ray offsets and shadow-ray
@@ -96,6 +96,10 @@ def compiled_reason(integ) -> str | None:
     """Why the scene of ``integ`` cannot take the compiled path (None: it can)."""
     if integ.media or integ.cutout.any() or integ.two_faced.any() or integ.null_candidate.any():
         return "volumes, cutouts, thin-walled backfaces and null interfaces need the general path"
+    if integ.encloses.sum() > 1 and any(_may_transmit(o.material.surface.scattering)
+                                        for o in integ.objects):
+        return ("light transmitted into nested closed objects needs the general path's "
+                "stack of media and IORs")
     for light in integ.lights.lights:
         if isinstance(light, AreaLight):
             if _constant_emission(integ, light.object_id) is None:
@@ -103,6 +107,23 @@ def compiled_reason(integ) -> str | None:
         elif type(light) not in _KINDS:
             return f"{type(light).__name__} needs the general path"
     return None
+
+
+def _may_transmit(node) -> bool:
+    """Whether a df tree has a lobe that transmits (then the IOR outside an object
+    depends on the objects a path is inside)."""
+    stack = [] if node is None else [node]
+    while stack:
+        n = stack.pop()
+        mode = str(n.kwargs.get("mode", "scatter_reflect")).split("::")[-1]
+        if n.name == "diffuse_transmission_bsdf" or mode != "scatter_reflect":
+            return True
+        for value in n.kwargs.values():
+            if isinstance(value, list | tuple):
+                stack.extend(v for v in value if hasattr(v, "kwargs"))
+            elif hasattr(value, "kwargs"):
+                stack.append(value)
+    return False
 
 
 def _varying(material) -> bool:
