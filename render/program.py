@@ -141,6 +141,8 @@ def _as_rows(value, width: int, name: str) -> np.ndarray:
     """An argument as (rows, width) float64: a number, a ``width`` vector, ``(n,)`` per
     lane (width 1), ``(n, width)`` per lane, or a number per lane broadcast over a colour."""
     a = np.asarray(value, dtype=np.float64)
+    shapes = ("a number or one number per lane (n,)" if width == 1 else
+              f"a number, {width} numbers or one row of {width} per lane (n, {width})")
     if a.ndim == 0:
         a = np.full((1, width), float(a))
     elif a.ndim == 1:
@@ -149,13 +151,13 @@ def _as_rows(value, width: int, name: str) -> np.ndarray:
         elif a.shape[0] == width:
             a = a[None, :]
         else:
-            raise ValueError(f"{name} must be a number, {width} numbers or one row per lane, "
-                             f"got shape {a.shape}")
-    elif a.ndim == 2 and a.shape[1] == 1 and width > 1:
+            raise ValueError(f"{name} must be {shapes}, got shape {a.shape}")
+    elif width == 1:  # a float: (n, 1) or more dimensions is a shape mistake
+        raise ValueError(f"{name} must be {shapes}, got shape {a.shape}")
+    elif a.ndim == 2 and a.shape[1] == 1:
         a = np.repeat(a, width, axis=1)
     if a.ndim != 2 or a.shape[1] != width:
-        raise ValueError(f"{name} must be a number, {width} numbers or one row per lane, "
-                         f"got shape {a.shape}")
+        raise ValueError(f"{name} must be {shapes}, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return a
@@ -202,7 +204,11 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
         if value is REQUIRED or isinstance(value, str) or value is None:
             raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
         if p.type == "float3x3":  # row-major, M[i][j] at slot 3 i + j
-            value = np.asarray(value, dtype=np.float64).reshape(-1, 9)
+            value = np.asarray(value, dtype=np.float64)
+            if value.shape[-2:] != (3, 3) or value.ndim not in (2, 3):
+                raise ValueError(f"{name}: {p.name} must be a 3x3 matrix or one per lane "
+                                 f"(n, 3, 3), got shape {value.shape}")
+            value = value.reshape(-1, 9)
         a = _as_rows(value, TYPE_WIDTH.get(p.type, p.width), f"{name}: {p.name}")
         if a.shape[1] != p.width:  # a float packed as a grey colour
             a = np.repeat(a, p.width, axis=1)
@@ -669,9 +675,10 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
     both in the inherited local frame.  ``lobes``: a :class:`Lobe` or a dict from the
     scatter mode's name to the lobes of an elemental df.  ``unsupported``: parameters
     that must stay at their defaults.  ``albedo_table``: see :func:`leaf_program`.
-    ``check(values)`` raises ValueError for arguments MDL does not allow.  A 3x3
-    context (``object_to_local``, packed as 9 slots ``object_to_local_ij``) is taken as
-    one ``(3, 3)`` or ``(rows, 3, 3)`` argument.
+    ``check(values)`` raises ValueError for arguments MDL does not allow; it sees the
+    arguments as given (a 3x3 context left out is None).  A 3x3 context
+    (``object_to_local``, packed as 9 slots ``object_to_local_ij``; the identity when
+    left out) is taken as one ``(3, 3)`` or ``(rows, 3, 3)`` argument.
     """
     import inspect
 
@@ -686,7 +693,7 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
     if signature.context:
         extra += [(c, _CONTEXT_DEFAULTS.get(c)) for c in signature.context
                   if c[:-3] not in matrices]
-        extra += [(m, np.eye(3)) for m in matrices]
+        extra += [(m, None) for m in matrices]  # None: the identity (check sees None)
         extra.append(("thin_walled", False))
     defaults = {}
     for p in params:
@@ -716,13 +723,18 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
         for p in params:
             if isinstance(p.default, str) and p.default in names and values[p.name] is None:
                 values[p.name] = values[p.default]
+        if check is not None:
+            check(values)
         for m in matrices:
-            a = np.asarray(values.pop(m), dtype=np.float64).reshape(-1, 3, 3)
+            a = values.pop(m)
+            a = np.eye(3) if a is None else np.asarray(a, dtype=np.float64)
+            if a.shape[-2:] != (3, 3) or a.ndim not in (2, 3):
+                raise ValueError(f"{title}: {m} must be a 3x3 matrix or one per lane "
+                                 f"(n, 3, 3), got shape {a.shape}")
+            a = a.reshape(-1, 3, 3)
             for i in range(3):
                 for j in range(3):
                     values[f"{m}_{i}{j}"] = a[:, i, j]
-        if check is not None:
-            check(values)
         for u in unsupported:
             if np.any(np.asarray(values[u], dtype=np.float64) != np.asarray(
                     defaults[u], dtype=np.float64)):
@@ -763,8 +775,9 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
            f"{', '.join(names)}" + (f"; renderer context: {', '.join(n for n, _ in extra)}"
                                      if extra else "") + ".")
     def __getattr__(self, key):  # noqa: N807
-        """A packed parameter of the root node as stored (clamped): ``(rows,)`` for a
-        float, ``(rows, w)`` otherwise; ``mode`` as its MDL name."""
+        """A packed parameter of the root node as stored (clamped): a float as a number
+        (0-d) when one row serves every lane, else ``(rows,)``; ``(rows, w)`` otherwise;
+        ``mode`` as its MDL name."""
         prog = self.__dict__.get("program")
         if prog is None or key.startswith("__"):
             raise AttributeError(key)
@@ -780,7 +793,9 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
             raise AttributeError(f"{py_name} has no attribute {key!r}") from None
         width = 1 if key in signature.context else signature.param(key).width
         cols = prog.P[:, root[BASE] + at:root[BASE] + at + width]
-        return cols[:, 0] if width == 1 else cols
+        if width == 1:
+            return cols[0, 0] if prog.rows == 1 else cols[:, 0]
+        return cols
 
     cls = type(py_name, (base_cls,), {"__init__": __init__, "__doc__": doc,
                                       "__getattr__": __getattr__, "__module__": module,

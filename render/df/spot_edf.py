@@ -36,7 +36,7 @@ from render.df import _kernel_common as kc
 from render.df._signature import Param, Signature
 from render.jit import njit
 from render.numerics import TOL
-from render.program import O_SPOT_EDF, df_class
+from render.program import BASE, O_SPOT_EDF, df_class
 
 __all__ = [
     "SpotEdf",
@@ -168,5 +168,49 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
 
 # --- the Python class ------------------------------------------------------------------
 
-SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE, module=__name__)
+def _check(values: dict) -> None:
+    """MDL's constraints, and the object frame a global spot needs."""
+    for name in ("exponent", "spread"):
+        if not np.all(np.isfinite(np.asarray(values[name], dtype=np.float64))):
+            raise ValueError(f"df::spot_edf needs a finite {name}, got {values[name]!r}")
+    frame = np.asarray(values["global_frame"], dtype=np.float64)
+    if frame.shape != (3, 3) or not np.all(np.isfinite(frame)):
+        raise ValueError(f"df::spot_edf: global_frame must be a finite 3x3 matrix (uniform), "
+                         f"got shape {frame.shape}")
+    if values["global_distribution"]:
+        if values["object_to_local"] is None:
+            raise ValueError("df::spot_edf with global_distribution = true needs "
+                             "object_to_local (the rotation from object space into the "
+                             "local shading frame; material.shade passes it), or set "
+                             "global_distribution = false")
+        if not np.any(frame[:, 2]):
+            raise ValueError("df::spot_edf: global_frame maps +z to a zero vector (the spot "
+                             "axis); give a rotation")
+
+
+_SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE, check=_check,
+                    module=__name__)
+
+
+class SpotEdf(_SpotEdf):
+    __doc__ = _SpotEdf.__doc__
+
+    @property
+    def axis(self) -> np.ndarray:
+        """(rows, 3): the spot axis in the local shading frame (``+z`` for a local spot;
+        ``object_to_local @ global_frame[:, 2]``, unit, for a global one), as the
+        kernels compute it."""
+        P = self.program.P
+        b = self.program.code[self.program.root, BASE]
+        out = np.tile([0.0, 0.0, 1.0], (len(P), 1))
+        on = P[:, b + _GLOBAL] != 0.0
+        g = P[:, b + _FRAME + np.array([2, 5, 8])]
+        m = P[:, b + _O2L:b + _O2L + 9].reshape(-1, 3, 3)
+        a = np.einsum("nij,nj->ni", m, g)
+        length = np.linalg.norm(a, axis=1, keepdims=True)
+        a = np.divide(a, length, out=np.zeros_like(a), where=length > 0.0)
+        out[on] = a[on]
+        return out
+
+
 spot_edf = SpotEdf

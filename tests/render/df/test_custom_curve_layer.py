@@ -311,5 +311,5 @@ def test_no_gain_sweep(r0, r90, f82, exponent, weight, roughness, layer, base, b
 def test_errors():
     with pytest.raises(ValueError, match="normal_reflectivity must be finite"):
         custom_curve_layer(np.inf)
-    with pytest.raises(ValueError, match="base must be a Bsdf"):
+    with pytest.raises(ValueError, match=r"\(base\) must be a bound bsdf"):
         custom_curve_layer(0.1, base=3.0)

@@ -142,10 +142,10 @@ def test_tint_is_saturated_and_lanes_broadcast():
 def test_bad_arguments():
     with pytest.raises(ValueError, match="tint must be"):
         diffuse_reflection_bsdf(tint=[1.0, 0.5])
-    with pytest.raises(ValueError, match="roughness must be a float"):
+    with pytest.raises(ValueError, match="roughness must be a number or one number per lane"):
         diffuse_reflection_bsdf(roughness=np.zeros((2, 2)))
     with pytest.raises(
-        ValueError, match="roughness has 2 per-lane values but the call has 3 lanes"
+        ValueError, match="holds 2 per-lane values but the call has 3 lanes"
     ):
         diffuse_reflection_bsdf(roughness=np.zeros(2)).eval(np.ones((3, 3)), np.ones((3, 3)))
     with pytest.raises(ValueError, match=r"wi must have shape \(n, 3\)"):

@@ -271,4 +271,7 @@ def test_layer_normal_errors():
         node.bind(state)
     # a zero normal falls back to the frame's normal (no NaN)
     zero = mdf.weighted_layer(layer=mdf.specular_bsdf(), normal=(0.0, 0.0, 0.0)).bind(state)
-    assert zero.layer_frame.identity
+    assert len(zero.program.frames) == 1  # no layer frame of its own: the shading frame
+    wo = tile(direction(20.0, 150.0), 3)
+    s = zero.sample(wo, np.full(3, 0.5), np.full((3, 2), 0.5))
+    assert np.allclose(s.wi, wo * [-1.0, -1.0, 1.0], atol=1e-12)

@@ -310,7 +310,7 @@ def test_per_lane_parameters_match_scalar_ones(rng):
 
 
 def test_bad_arguments():
-    with pytest.raises(ValueError, match="tangent_u must be a 3-vector"):
+    with pytest.raises(ValueError, match="tangent_u must be a number, 3 numbers or one row of 3"):
         simple_glossy_bsdf(roughness_u=0.3, tangent_u=(1.0, 0.0))
     with pytest.raises(ValueError, match="roughness_u must be finite"):
         simple_glossy_bsdf(roughness_u=np.nan)

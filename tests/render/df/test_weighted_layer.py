@@ -193,11 +193,11 @@ def test_own_normal_glossy_peaks_at_the_tilted_mirror_direction():
 
 
 def test_errors():
-    with pytest.raises(ValueError, match="layer must be a Bsdf"):
+    with pytest.raises(ValueError, match=r"\(layer\) must be a bound bsdf"):
         weighted_layer(0.5, layer="diffuse")
     with pytest.raises(ValueError, match="normal must be a non-zero vector"):
         weighted_layer(0.5, D(), normal=(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="weight must be finite"):
         weighted_layer(np.nan, D())
-    with pytest.raises(ValueError, match="weight must be a float or an"):
+    with pytest.raises(ValueError, match="weight must be a number or one number per lane"):
         weighted_layer([[0.5]], D())
