@@ -43,6 +43,7 @@ from render.df import (
     weighted_layer,
 )
 from render.df._layer import f82_curve1
+from render.program import CHAT_NONE, TABLE
 from render.testing import direction, furnace
 
 
@@ -238,37 +239,38 @@ def test_anisotropic_layer_does_not_gain_at_any_azimuth():
 
 
 def test_per_lane_parameters_alike_share_the_table():
-    # per-lane rows that are all alike (constants bound per lane, normals bent in the local
-    # frame) share the table of the same node with single-row parameters: built through
-    # calls of the node's own lane count, it equals the one built in a single call
+    # per-lane rows that are all alike (constants bound per lane) get the Ĉ table of the
+    # same node with single-row parameters: the same values, hence the same factors
     n = 600
     alike = custom_curve_layer(np.full(n, 0.01), 1.0, 1.7, 1.0,
-                               G(roughness_u=np.full(n, 0.43) + 1e-6 * np.arange(n) / n), None)
-    shared = custom_curve_layer(0.01, 1.0, 1.7, 1.0, G(roughness_u=0.43), None)
+                               G(roughness_u=np.full(n, 0.43)), S())
+    shared = custom_curve_layer(0.01, 1.0, 1.7, 1.0, G(roughness_u=0.43), S())
+    pa, ps = alike.program, shared.program
+    assert pa.rows == n and ps.rows == 1
+    assert pa.code[pa.root, TABLE] >= 0 and ps.code[ps.root, TABLE] >= 0
+    ta, ts = pa.tables[pa.code[pa.root, TABLE]:], ps.tables[ps.code[ps.root, TABLE]:]
+    assert np.array_equal(ta, ts)
     wo = np.stack([direction(t, 30.0) for t in np.linspace(0.0, 89.0, n)])
-    c_alike = alike._curve_albedo.at(wo, wo, "wo")
-    c_shared = shared._curve_albedo.at(wo[:7], wo[:7], "wo")
-    assert alike._curve_albedo.mode == shared._curve_albedo.mode == "table"
-    assert alike._curve_albedo.table is shared._curve_albedo.table
-    assert np.array_equal(c_alike[:7], c_shared)
-    one_call = shared._curve_albedo._build_side(0, None)  # the rows spread by 1e-6
-    assert np.allclose(alike._curve_albedo.table.side(0)[0], one_call, rtol=1e-5, atol=0)
+    wi = np.stack([direction(t, 200.0) for t in np.linspace(0.0, 89.0, n)])
+    assert np.array_equal(alike.eval_pdf(wo, wi)[0], shared.eval_pdf(wo, wi)[0])
 
 
-def test_per_lane_parameters_that_differ_integrate_at_the_directions(rng):
-    # rows that differ (textures) cannot share a table: Ĉ is integrated per call at the
-    # directions themselves (CURVE_ALBEDO_DIRECT_POINTS); the node still conserves, stays
-    # consistent and reciprocal, and its Ĉ agrees with a 2048-point quadrature to the
-    # documented 1.2e-2 (3e-3 on average)
+def test_per_lane_parameters_that_differ_keep_libbsdfs_factor(rng):
+    # rows that differ (textures) cannot share a table: the node keeps libbsdf's base
+    # factor 1 - w max(C(nk1), C(nk2r)) (no Ĉ, render.program.CHAT_NONE) on every lane,
+    # and stays consistent, reciprocal and without gain here
     n = 200
     node = custom_curve_layer(np.linspace(0.0, 0.01, n), 1.0, 1.0, 1.0,
                               G(roughness_u=np.linspace(0.4, 0.6, n)), G(roughness_u=0.05))
+    assert node.program.code[node.program.root, TABLE] == CHAT_NONE
     wo = random_dirs(rng, n)
     wo[:, 2] = np.abs(wo[:, 2])
-    direct = node._curve_albedo.at(wo, wo, "wo")
-    assert node._curve_albedo.mode == "direct"
-    err = np.abs(direct - node._curve_albedo.integrate(wo, 2048))
-    assert err.max() < 0.012 and err.mean() < 3e-3, (err.max(), err.mean())
+    # the base factor at wi = wo: libbsdf's, lane by lane (C(nk1) = C(nk2r) there)
+    r0 = np.linspace(0.0, 0.01, n)
+    lone = custom_curve_layer(r0, 1.0, 1.0, 1.0, None, G(roughness_u=0.05))
+    c = r0 + (1.0 - r0) * (1.0 - wo[:, 2])
+    base = G(roughness_u=0.05).eval(wo, wo)
+    assert np.allclose(lone.eval(wo, wo), (1.0 - c)[:, None] * base, rtol=1e-12, atol=1e-300)
     # consistency at the sampled directions (on every lane: the parameters are per lane)
     s = node.sample(wo, rng.random(n), rng.random((n, 2)))
     e, p = node.eval_pdf(wo, s.wi)
