@@ -674,7 +674,9 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
     layer (children ``layer`` and ``base`` and a ``normal``) also takes ``tangent_u``,
     both in the inherited local frame.  ``lobes``: a :class:`Lobe` or a dict from the
     scatter mode's name to the lobes of an elemental df.  ``unsupported``: parameters
-    that must stay at their defaults.  ``albedo_table``: see :func:`leaf_program`.
+    that must stay at their defaults.  ``albedo_table(P, flags)``: the node table the
+    leaf's albedo kernel reads, from its packed row, or from all its rows (2-D) when
+    the arguments are per lane.
     ``check(values)`` raises ValueError for arguments MDL does not allow; it sees the
     arguments as given (a 3x3 context left out is None).  A 3x3 context
     (``object_to_local``, packed as 9 slots ``object_to_local_ij``; the identity when
@@ -756,16 +758,23 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
             program = combine(signature.kind, op, columns, flags,
                               [None if c is None else c.program for c in kids])
         else:
-            program = leaf_program(signature.kind, op, signature, values, Lobe.NONE, title,
-                                   albedo_table)
+            program = leaf_program(signature.kind, op, signature, values, Lobe.NONE, title)
+            tables = program.tables
+            code = program.code
+            if albedo_table is not None:  # from every row: per-lane roughness has its own
+                code = code.copy()
+                code[0, TABLE] = 0
+                P = program.P
+                tables = np.asarray(albedo_table(P if len(P) > 1 else P[0],
+                                                 int(code[0, FLAGS])), dtype=np.float64)
             if isinstance(lobes, dict):
                 mode = str(getattr(values.get("mode"), "value", values.get("mode")))
                 mode = mode.removeprefix("::").removeprefix("df::")
                 leaf_lobes = lobes[mode]
             else:
                 leaf_lobes = Lobe.NONE if lobes is None else lobes
-            program = Program(program.kind, program.code, program.kids, program.frames,
-                              program.P, program.tables, leaf_lobes)
+            program = Program(program.kind, code, program.kids, program.frames,
+                              program.P, tables, leaf_lobes)
         base_cls.__init__(self, program)
         for c, child in zip(children, kids, strict=True):
             self.__dict__[c] = child

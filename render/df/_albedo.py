@@ -23,7 +23,11 @@ against quadrature and Monte Carlo: ``tests/render/df``.
 For the compiled render core, :func:`node_table` bakes one df node's roughness (and IOR)
 into a short table (the columns above, interpolated in roughness, for ``wo`` on either
 side) and the kernel :func:`table_albedo` interpolates it in ``mu`` (and ``phi``), as
-the numpy tables did; the dfs' ``albedo`` kernels read it.  Tables are not built at
+the numpy tables did; the dfs' ``albedo`` kernels read it.  A node whose roughness or
+IOR differs per lane (textures) gets a :func:`lanes_table` instead: the columns its lanes
+need on the roughness grid, found from each lane's own values by
+:func:`lane_table_albedo` (bit for bit what a single-lane node table gives that lane).
+Tables are not built at
 import and frozen into the kernels: one isotropic column costs about 0.3 s of sampling
 and one anisotropic corner 0.35 s (2 busy cores), so a full grid is ~10 s per (mode,
 IOR) isotropic and ~7 min anisotropic, and a refracting mode needs it per IOR; a node
@@ -45,7 +49,9 @@ __all__ = [
     "iso_column",
     "aniso_column",
     "node_table",
+    "lanes_table",
     "table_albedo",
+    "lane_table_albedo",
     "ROUGHNESS_NODES",
     "MU_MIN",
 ]
@@ -133,7 +139,9 @@ def _locate(y: Arr, nodes: Arr) -> tuple[np.ndarray, Arr]:
 
 
 _MU_NODES_A = np.linspace(0.0, 1.0, N_MU_A)
-_ISO, _ANISO = 0.0, 1.0
+_ISO, _ANISO, _LANES = 0.0, 1.0, 2.0
+_NR = len(ROUGHNESS_NODES)
+_R_LO = float(ROUGHNESS_NODES[0])
 _HEADER = 2
 
 
@@ -231,4 +239,142 @@ def table_albedo(T, t, mu, phi, inside):
             w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
         at = base + k * N_MU_A + j
         E += w * ((1.0 - fx) * T[at] + fx * T[at + 1])
+    return E
+
+
+def _grid(cls, mode, eta: float, ru: np.ndarray, rv: np.ndarray) -> np.ndarray:
+    """The roughness-grid part of a :func:`lanes_table` for lanes ``(ru, rv)`` (clipped):
+    ``[iso map (_NR), aniso map (_NR^2), columns...]``; a map entry is the offset of
+    column ``i`` (``(iu, iv)``) from the grid's start, or -1 where no lane needs it."""
+    maps = np.full(_NR + _NR * _NR, -1.0)
+    cols, at = [], len(maps)
+    iso = ru == rv
+    i, f = _locate(np.sqrt(ru[iso]), _Y)
+    shift = f >= 1.0
+    i, f = np.where(shift, i + 1, i), np.where(shift, 0.0, f)
+    for k in sorted(set(i.tolist()) | set((i[f > 0.0] + 1).tolist())):
+        maps[k] = at
+        cols.append(iso_column(cls, mode, eta, k))
+        at += N_MU
+    iu, fu = _locate(np.sqrt(ru[~iso]), _Y)
+    iv, fv = _locate(np.sqrt(rv[~iso]), _Y)
+    corners = set()
+    for du in (0, 1):
+        for dv in (0, 1):
+            w = (fu if du else 1 - fu) * (fv if dv else 1 - fv)
+            corners |= set(zip((iu + du)[w > 0.0].tolist(), (iv + dv)[w > 0.0].tolist(),
+                               strict=True))
+    for a, b in sorted(corners):
+        maps[_NR + a * _NR + b] = at
+        cols.append(aniso_column(cls, mode, eta, a, b).ravel())
+        at += N_PHI * N_MU_A
+    return np.concatenate([maps, *cols])
+
+
+def lanes_table(cls: type, mode, roughness_u, roughness_v, iors=None, etas=None) -> np.ndarray:
+    """The albedo table of a node whose roughness (or IOR) differs per lane.
+
+    Parameters
+    ----------
+    cls, mode : as :func:`node_table`
+    roughness_u, roughness_v : (n,) float64
+    iors : (n, 2) float64, optional
+        Each lane's packed ``(ior_outside, ior_inside)`` (refracting modes only): the key
+        :func:`lane_table_albedo` finds the lane's IOR group by.
+    etas : (n, 2) float64, optional
+        Each lane's ``(eta_outside, eta_inside)`` as :func:`node_table` takes them.
+
+    Returns
+    -------
+    (k,) float64
+        ``[2, groups, (ior_outside, ior_inside, outside grid, inside grid) per group,
+        grids...]`` (offsets from the table's start; one group without refraction).
+    """
+    from render.df._common import ScatterMode
+
+    ru = np.clip(np.asarray(roughness_u, dtype=np.float64), _R_LO, 1.0)
+    rv = np.clip(np.asarray(roughness_v, dtype=np.float64), _R_LO, 1.0)
+    refracting = mode is not None and ScatterMode.parse(mode) is not ScatterMode.scatter_reflect
+    if refracting:
+        keys, first, group = np.unique(np.asarray(iors, dtype=np.float64), axis=0,
+                                       return_index=True, return_inverse=True)
+        group = group.ravel()
+    else:
+        keys, first, group = np.full((1, 2), np.nan), np.zeros(1, dtype=int), np.zeros(len(ru),
+                                                                                        dtype=int)
+    head = np.zeros(2 + 4 * len(keys))
+    head[0], head[1] = _LANES, len(keys)
+    parts, at = [head], len(head)
+    for g in range(len(keys)):
+        lanes = group == g
+        sides = [float(np.round(e, 4)) for e in (etas[first[g]] if refracting else (1.0,))]
+        offs = []
+        for eta in sides:
+            parts.append(_grid(cls, mode, eta, ru[lanes], rv[lanes]))
+            offs.append(at)
+            at += len(parts[-1])
+        head[2 + 4 * g: 6 + 4 * g] = (*keys[g], offs[0], offs[-1])
+    return np.concatenate(parts)
+
+
+@njit
+def _locate1(y, nodes):
+    """:func:`_locate` of one value."""
+    i = 0
+    while i < len(nodes) - 2 and nodes[i + 1] <= y:
+        i += 1
+    f = min(max((y - nodes[i]) / (nodes[i + 1] - nodes[i]), 0.0), 1.0)
+    return i, f
+
+
+@njit
+def lane_table_albedo(T, t, mu, phi, inside, ru, rv, ior_outside, ior_inside):
+    """White albedo ``E`` of one lane from its node's table at ``T[t:]``: a
+    :func:`node_table` (:func:`table_albedo`), or a :func:`lanes_table` read at the lane's
+    own roughness ``(ru, rv)`` and IOR pair (the values its node packs)."""
+    if T[t] != _LANES:
+        return table_albedo(T, t, mu, phi, inside)
+    e = t + 2
+    if T[t + 1] > 1.0:
+        for g in range(int(T[t + 1])):
+            if T[t + 2 + 4 * g] == ior_outside and T[t + 3 + 4 * g] == ior_inside:
+                e = t + 2 + 4 * g
+                break
+    gb = t + int(T[e + 3] if inside else T[e + 2])
+    ru = min(max(ru, _R_LO), 1.0)
+    rv = min(max(rv, _R_LO), 1.0)
+    y = math.sqrt(mu)
+    if ru == rv:
+        i, f = _locate1(math.sqrt(ru), _Y)
+        if f >= 1.0:
+            i, f = i + 1, 0.0
+        a = gb + int(T[gb + i])
+        c = gb + int(T[gb + i + 1]) if f > 0.0 else a
+        j = min(max(int(math.floor(y * (N_MU - 1))), 0), N_MU - 2)
+        fx = min(max((y - j / (N_MU - 1)) / (1.0 / (N_MU - 1)), 0.0), 1.0)
+        v0, v1 = T[a + j], T[a + j + 1]
+        if f > 0.0:
+            v0 = (1.0 - f) * v0 + f * T[c + j]
+            v1 = (1.0 - f) * v1 + f * T[c + j + 1]
+        return (1.0 - fx) * v0 + fx * v1
+    iu, fu = _locate1(math.sqrt(ru), _Y)
+    iv, fv = _locate1(math.sqrt(rv), _Y)
+    j = 0
+    while j < N_MU_A - 2 and _MU_NODES_A[j + 1] <= y:
+        j += 1
+    fx = min(max((y - _MU_NODES_A[j]) / (_MU_NODES_A[j + 1] - _MU_NODES_A[j]), 0.0), 1.0)
+    E = 0.0
+    for k in range(N_PHI):
+        w = 0.0
+        for c in range(N_PHI):
+            w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
+        v0 = v1 = 0.0
+        for du in range(2):
+            for dv in range(2):
+                wc = (fu if du else 1.0 - fu) * (fv if dv else 1.0 - fv)
+                if wc > 0.0:
+                    at = gb + int(T[gb + _NR + (iu + du) * _NR + iv + dv]) + k * N_MU_A + j
+                    v0 += wc * T[at]
+                    v1 += wc * T[at + 1]
+        E += w * ((1.0 - fx) * v0 + fx * v1)
     return E

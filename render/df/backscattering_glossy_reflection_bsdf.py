@@ -43,7 +43,7 @@ from render.bsdf import (
     Lobe,
 )
 from render.df import _kernel_common as kc
-from render.df._albedo import node_table, table_albedo
+from render.df._albedo import lane_table_albedo, lanes_table, node_table
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
 from render.jit import njit
@@ -212,14 +212,21 @@ def albedo(P, row, b, flags, wox, woy, woz, T, t):
     if not (ok and mu > kc.COS_ZERO):
         return 0.0, 0.0, 0.0
     phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
-    E = table_albedo(T, t, mu, phi, False)
+    E = lane_table_albedo(T, t, mu, phi, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                          max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0)
     return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
 
 
 def albedo_table(row, flags: int = 0) -> np.ndarray:
-    """The node table :func:`albedo` reads, for one packed row (constant arguments)."""
-    ru, rv = max(row[_RU], kc.ROUGHNESS_MIN), max(row[_RV], kc.ROUGHNESS_MIN)
-    return node_table(BackscatteringGlossyReflectionBsdf, None, ru, rv)
+    """The node table :func:`albedo` reads: a :func:`~render.df._albedo.node_table` for
+    one packed row (constant arguments), a :func:`~render.df._albedo.lanes_table` for
+    rows (``(rows, SIGNATURE.width)``) whose roughness differs (per-lane arguments)."""
+    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
+    ru = np.maximum(rows[:, _RU], kc.ROUGHNESS_MIN)
+    rv = np.maximum(rows[:, _RV], kc.ROUGHNESS_MIN)
+    if np.all(ru == ru[0]) and np.all(rv == rv[0]):
+        return node_table(BackscatteringGlossyReflectionBsdf, None, ru[0], rv[0])
+    return lanes_table(BackscatteringGlossyReflectionBsdf, None, ru, rv)
 
 # --- the Python class ------------------------------------------------------------------
 

@@ -52,7 +52,7 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._albedo import node_table, table_albedo
+from render.df._albedo import lane_table_albedo, lanes_table, node_table
 from render.df._microfacet import mf_finish, mf_geometry, mf_sample_dir
 from render.df._signature import (
     MODE_FLAGS,
@@ -250,30 +250,47 @@ def albedo(P, row, b, flags, wox, woy, woz, T, t):
     if not (ok and mu > kc.COS_ZERO):
         return 0.0, 0.0, 0.0
     phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
-    E = table_albedo(T, t, mu, phi, flip)
+    E = lane_table_albedo(T, t, mu, phi, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                          max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
+                          P[row, b + _IOR_IN])
     return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
 
 
 def albedo_table(row, flags: int) -> np.ndarray:
-    """The node table :func:`albedo` reads, for one packed row (constant arguments).
+    """The node table :func:`albedo` reads: a :func:`~render.df._albedo.node_table` for
+    one packed row (constant arguments), a :func:`~render.df._albedo.lanes_table` for
+    rows whose roughness or IOR differ (per-lane arguments).
 
     Parameters
     ----------
-    row : (SIGNATURE.width,) float64
+    row : (SIGNATURE.width,) or (rows, SIGNATURE.width) float64
         The node's packed slots.
     flags : int
         Its mode and thin-walled flags.
     """
     from render.df._common import ScatterMode
 
+    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
     mode = flags & _MODE_MASK_
     thin = (flags & _THIN_) != 0
-    ru, rv = max(row[_RU], kc.ROUGHNESS_MIN), max(row[_RV], kc.ROUGHNESS_MIN)
-    if mode == _REFLECT_ or thin:
-        return node_table(SimpleGlossyBsdf, ScatterMode.scatter_reflect, ru, rv)
-    key = {v: k for k, v in MODE_FLAGS.items()}[mode]
-    o, i = kc.ior_pair(row[_IOR_OUT], row[_IOR_IN], False, False, True)
-    return node_table(SimpleGlossyBsdf, key, ru, rv, i / o, o / i)
+    key = (ScatterMode.scatter_reflect if mode == _REFLECT_ or thin
+           else {v: k for k, v in MODE_FLAGS.items()}[mode])
+    cols = [_RU, _RV] if key is ScatterMode.scatter_reflect else [_RU, _RV, _IOR_OUT, _IOR_IN]
+    ru = np.maximum(rows[:, _RU], kc.ROUGHNESS_MIN)
+    rv = np.maximum(rows[:, _RV], kc.ROUGHNESS_MIN)
+    if np.all(rows[:, cols] == rows[0, cols]):
+        if key is ScatterMode.scatter_reflect:
+            return node_table(SimpleGlossyBsdf, key, ru[0], rv[0])
+        o, i = kc.ior_pair(rows[0, _IOR_OUT], rows[0, _IOR_IN], False, False, True)
+        return node_table(SimpleGlossyBsdf, key, ru[0], rv[0], i / o, o / i)
+    if key is ScatterMode.scatter_reflect:
+        return lanes_table(SimpleGlossyBsdf, key, ru, rv)
+    iors = rows[:, [_IOR_OUT, _IOR_IN]]
+    etas = np.empty_like(iors)
+    for k, (ro, ri) in enumerate(iors):
+        o, i = kc.ior_pair(ro, ri, False, False, True)
+        etas[k] = i / o, o / i
+    return lanes_table(SimpleGlossyBsdf, key, ru, rv, iors, etas)
 
 # --- the Python class ------------------------------------------------------------------
 
