@@ -307,6 +307,17 @@ def test_per_lane_parameters_match_scalar_ones(rng):
     for i, r in enumerate((0.3, 1.0)):
         one = simple_glossy_bsdf(roughness_u=r, tint=tint[i])
         assert np.allclose(a[i], one.albedo(wo[i : i + 1])[0])
+    # anisotropic and isotropic lanes, refracting with an IOR per lane (both sides of the
+    # surface): each lane reads the table a single-lane node of its values reads
+    ru3, rv3 = np.array([0.3, 0.2, 0.2]), np.array([0.1, 0.2, 0.2])
+    ior3 = np.array([1.5, 1.5, 1.33])
+    w3 = np.concatenate([wo[:3, :2], np.abs(wo[:3, 2:]) * [[1.0], [-1.0], [1.0]]], axis=1)
+    three = simple_glossy_bsdf(roughness_u=ru3, roughness_v=rv3, mode=RT, ior_inside=ior3)
+    a = three.albedo(w3)
+    for i in range(3):
+        one = simple_glossy_bsdf(roughness_u=ru3[i], roughness_v=rv3[i], mode=RT,
+                                 ior_inside=ior3[i])
+        assert np.array_equal(a[i], one.albedo(w3[i : i + 1])[0])
 
 
 def test_bad_arguments():
