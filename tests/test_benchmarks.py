@@ -17,6 +17,7 @@ BENCHMARKS = {
     "bump_vs_displacement.py": ["--quick"],
     "glossy_kernels.py": ["--quick"],
     "embree_calls.py": ["--quick"],
+    "gallery_speed.py": ["--quick"],
 }
 
 

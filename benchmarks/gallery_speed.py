@@ -1,0 +1,74 @@
+"""Benchmark: samples per second of every gallery scene, for this tree and another.
+
+Run ``python benchmarks/gallery_speed.py [--other PATH] [--spp N] [--markdown]``.  Each
+scene is rendered (after a warm-up render that compiles and builds) by this checkout's
+``render`` and, with ``--other``, by the ``render`` of another checkout (for example an
+earlier commit in a ``git worktree``), alternately scene by scene in fresh processes, so
+load on the machine hits both alike.  Prints samples/s, the path each took, and the
+ratio.  ``--quick`` renders three scenes at 1 spp.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+_CHILD = r"""
+import json, sys, time
+from render.integrator import Integrator
+from render.scene import load_scene
+scene = load_scene(sys.argv[1]); spp = int(sys.argv[2])
+geo = scene.build(); integ = Integrator(scene, geo)
+integ.render(spp=1, progress=False)  # compile (cached) and warm up
+film = integ.render(spp=spp, progress=False)
+print(json.dumps({"rate": film.stats["samples_per_s"], "path": film.stats["path"]}))
+"""
+
+
+def measure(tree: Path, scene: Path, spp: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    out = subprocess.run([sys.executable, "-c", _CHILD, str(scene), str(spp)], cwd=tree,
+                         env=env, capture_output=True, text=True, timeout=1800)
+    if out.returncode:
+        return {"rate": float("nan"), "path": "error: " + out.stderr.strip().splitlines()[-1]}
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--other", type=Path, help="another checkout to compare with")
+    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--markdown", action="store_true")
+    args = ap.parse_args(argv)
+    scenes = sorted((ROOT / "gallery" / "scenes").glob("*.toml"))
+    if args.quick:
+        scenes, args.spp = scenes[:3], 1
+    rows = []
+    for s in scenes:
+        new = measure(ROOT, s, args.spp)
+        old = measure(args.other, s, args.spp) if args.other else None
+        rows.append((s.stem, new, old))
+        ratio = new["rate"] / old["rate"] if old else float("nan")
+        if not args.markdown:
+            print(f"{s.stem}: {new['rate'] / 1e6:.3f} M/s ({new['path']})"
+                  + (f", other {old['rate'] / 1e6:.3f} M/s ({old['path']}), x{ratio:.2f}"
+                     if old else ""), flush=True)
+    if args.markdown:
+        print("| scene | before: Msamples/s (path) | after: Msamples/s (path) | after / before |")
+        print("|---|---|---|---|")
+        for name, new, old in rows:
+            b = f"{old['rate'] / 1e6:.3f} ({old['path']})" if old else ""
+            r = f"{new['rate'] / old['rate']:.2f}" if old else ""
+            print(f"| {name} | {b} | {new['rate'] / 1e6:.3f} ({new['path']}) | {r} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
