@@ -15,6 +15,7 @@ pdf: :mod:`render.df._mix`.
 
 Examples
 --------
+>>> import numpy as np
 >>> from render.df import diffuse_reflection_bsdf
 >>> m = clamped_mix([bsdf_component(0.7, diffuse_reflection_bsdf(tint=1.0)),
 ...                  bsdf_component(0.7, diffuse_reflection_bsdf(tint=0.5)),

@@ -16,6 +16,7 @@ whenever the weights sum to 1 or more.
 
 Examples
 --------
+>>> import numpy as np
 >>> from render.df import diffuse_reflection_bsdf
 >>> m = normalized_mix([bsdf_component(3.0, diffuse_reflection_bsdf(tint=1.0)),
 ...                     bsdf_component(1.0, diffuse_reflection_bsdf(tint=0.0))])

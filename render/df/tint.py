@@ -12,6 +12,7 @@ two-tint reflection/transmission overload (MDL 1.6) are not implemented.
 
 Examples
 --------
+>>> import numpy as np
 >>> from render.df import diffuse_reflection_bsdf
 >>> t = tint((1.0, 0.5, 2.0), diffuse_reflection_bsdf(tint=0.8))
 >>> t.albedo(np.array([[0.0, 0.0, 1.0]])).round(12).tolist()
