@@ -440,94 +440,64 @@ def _layer_params(weight_type, weight_default) -> tuple:
 
 _PI = float(np.pi)
 
+UniformFloat3x3 = Annotated[Any, MdlType("float3x3", True)]
+
+#: MDL types of the parameters a df SIGNATURE declares (type name, uniform) -> annotation
+_PARAM_TYPES = {
+    ("float", False): Float, ("float", True): UniformFloat,
+    ("color", False): Color, ("color", True): UniformColor,
+    ("float3", False): Float3, ("float3x3", True): UniformFloat3x3,
+    ("bool", False): Bool, ("bool", True): UniformBool,
+    ("string", False): String, ("string", True): String,
+    ("scatter_mode", True): ScatterModeArg,
+    ("bsdf", False): BsdfArg, ("edf", False): EdfArg,
+    ("bsdf_component[]", False): BsdfComponents,
+    ("color_bsdf_component[]", False): ColorBsdfComponents,
+}
+#: defaults that MDL takes from the state or from another parameter
+_STATE_DEFAULTS = {d.text: d for d in (_TANGENT_U, _SAME_AS_U, _NORMAL)}
+#: where each df's SIGNATURE is declared: MDL name -> (module in render.df, attribute)
+_SIGNATURE_SOURCES = {
+    **{n: (n, "SIGNATURE") for n in (
+        "diffuse_reflection_bsdf", "diffuse_transmission_bsdf", "specular_bsdf",
+        "simple_glossy_bsdf", "backscattering_glossy_reflection_bsdf", "diffuse_edf",
+        "spot_edf", "anisotropic_vdf", "weighted_layer", "fresnel_layer",
+        "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor")},
+    **{f"color_{n}": (n, "COLOR_SIGNATURE") for n in (
+        "weighted_layer", "fresnel_layer", "custom_curve_layer", "normalized_mix",
+        "clamped_mix")},
+    **{f"{c}{k}_component": ("_mix", f"{c.upper()}{k.upper()}_COMPONENT_SIGNATURE")
+       for c in ("", "color_") for k in ("bsdf", "edf")},
+}
+
+
+def _df_signatures() -> Mapping[str, tuple[str, tuple[tuple[str, Any, Any], ...]]]:
+    """The dfs' MDL signatures, read from the SIGNATURE each df module declares beside
+    its kernels (:mod:`render.df._signature`): the one place they are written."""
+    import importlib
+
+    from render.df._signature import REQUIRED
+
+    out = {}
+    for name, (module, attr) in _SIGNATURE_SOURCES.items():
+        sig = getattr(importlib.import_module(f"render.df.{module}"), attr)
+        params = []
+        for p in sig.params:
+            if not p.mdl:
+                continue
+            d = p.default
+            if d is REQUIRED:
+                d = _REQ
+            elif isinstance(d, str) and d in _STATE_DEFAULTS:
+                d = _STATE_DEFAULTS[d]
+            params.append((p.name, _PARAM_TYPES[p.type, p.uniform], d))
+        out[name] = (sig.kind, tuple(params))
+    return MappingProxyType(out)
+
+
 #: MDL signatures of the distribution functions: name -> (kind, ((param, type, default),...)).
 #: Defaults are MDL's (spec 1.10); ``_REQ`` marks parameters without one.
-DF_SIGNATURES: Mapping[str, tuple[str, tuple[tuple[str, Any, Any], ...]]] = MappingProxyType({
-    "diffuse_reflection_bsdf": ("bsdf", (
-        ("tint", Color, (1.0, 1.0, 1.0)),
-        ("roughness", Float, 0.0),
-        ("multiscatter_tint", Color, (0.0, 0.0, 0.0)),
-        ("handle", String, ""),
-    )),
-    "diffuse_transmission_bsdf": ("bsdf", (
-        ("tint", Color, (1.0, 1.0, 1.0)),
-        ("handle", String, ""),
-    )),
-    "specular_bsdf": ("bsdf", (
-        ("tint", Color, (1.0, 1.0, 1.0)),
-        ("mode", ScatterModeArg, "scatter_reflect"),
-        ("handle", String, ""),
-    )),
-    "simple_glossy_bsdf": ("bsdf", (
-        ("roughness_u", Float, _REQ),
-        ("roughness_v", Float, _SAME_AS_U),
-        ("tint", Color, (1.0, 1.0, 1.0)),
-        ("multiscatter_tint", Color, (0.0, 0.0, 0.0)),
-        ("tangent_u", Float3, _TANGENT_U),
-        ("mode", ScatterModeArg, "scatter_reflect"),
-        ("handle", String, ""),
-    )),
-    "backscattering_glossy_reflection_bsdf": ("bsdf", (
-        ("roughness_u", Float, _REQ),
-        ("roughness_v", Float, _SAME_AS_U),
-        ("tint", Color, (1.0, 1.0, 1.0)),
-        ("multiscatter_tint", Color, (0.0, 0.0, 0.0)),
-        ("tangent_u", Float3, _TANGENT_U),
-        ("handle", String, ""),
-    )),
-    "diffuse_edf": ("edf", (
-        ("handle", String, ""),
-    )),
-    "spot_edf": ("edf", (
-        ("exponent", UniformFloat, _REQ),
-        ("spread", UniformFloat, _PI),
-        ("global_distribution", UniformBool, True),
-        ("global_frame", Annotated[Any, MdlType("float3x3", True)],
-         ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))),
-        ("handle", String, ""),
-    )),
-    # volumes: the node exists so materials such as the Handbook's subsurface_scattering
-    # can be written; binding needs a render.df implementation (not there yet)
-    "anisotropic_vdf": ("vdf", (
-        ("directional_bias", Float, 0.0),
-        ("handle", String, ""),
-    )),
-    # layers, mixes and modifiers (render.df.weighted_layer ... directional_factor)
-    "weighted_layer": ("bsdf", _layer_params(Float, 1.0)),
-    "color_weighted_layer": ("bsdf", _layer_params(Color, (1.0, 1.0, 1.0))),
-    "fresnel_layer": ("bsdf", (("ior", Float, _REQ),) + _layer_params(Float, 1.0)),
-    "color_fresnel_layer": ("bsdf", (("ior", Color, _REQ),)
-                            + _layer_params(Color, (1.0, 1.0, 1.0))),
-    "custom_curve_layer": ("bsdf", (
-        ("normal_reflectivity", Float, _REQ),
-        ("grazing_reflectivity", Float, 1.0),
-        ("exponent", Float, 5.0),
-    ) + _layer_params(Float, 1.0)),
-    "color_custom_curve_layer": ("bsdf", (
-        ("normal_reflectivity", Color, _REQ),
-        ("grazing_reflectivity", Color, (1.0, 1.0, 1.0)),
-        ("f82_factor", Color, (1.0, 1.0, 1.0)),
-        ("exponent", Float, 5.0),
-    ) + _layer_params(Color, (1.0, 1.0, 1.0))),
-    "bsdf_component": ("bsdf_component", (("weight", Float, 0.0), ("component", BsdfArg, None))),
-    "color_bsdf_component": ("color_bsdf_component", (
-        ("weight", Color, (0.0, 0.0, 0.0)), ("component", BsdfArg, None))),
-    "edf_component": ("edf_component", (("weight", Float, 0.0), ("component", EdfArg, None))),
-    "color_edf_component": ("color_edf_component", (
-        ("weight", Color, (0.0, 0.0, 0.0)), ("component", EdfArg, None))),
-    "normalized_mix": ("bsdf", (("components", BsdfComponents, _REQ),)),
-    "clamped_mix": ("bsdf", (("components", BsdfComponents, _REQ),)),
-    "color_normalized_mix": ("bsdf", (("components", ColorBsdfComponents, _REQ),)),
-    "color_clamped_mix": ("bsdf", (("components", ColorBsdfComponents, _REQ),)),
-    "tint": ("bsdf", (("tint", Color, _REQ), ("base", BsdfArg, _REQ))),
-    "directional_factor": ("bsdf", (
-        ("normal_tint", Color, (1.0, 1.0, 1.0)),
-        ("grazing_tint", Color, (1.0, 1.0, 1.0)),
-        ("f82_factor", Color, (1.0, 1.0, 1.0)),
-        ("exponent", Float, 5.0),
-        ("base", BsdfArg, None),
-    )),
-})
+DF_SIGNATURES = _df_signatures()
 
 _KIND_TYPES = {"bsdf": BsdfArg, "edf": EdfArg, "vdf": VdfArg}
 _KIND_TYPES.update({k: Annotated[Any, MdlType(k)] for k in (
