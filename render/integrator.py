@@ -352,8 +352,8 @@ class Integrator:
             ior3 = np.asarray(shade_ior, dtype=np.float64)
             ior = (ior3[:, 0] + ior3[:, 1] + ior3[:, 2]) / 3.0
         nrm = getattr(sh, "normal", None)
-        if nrm is None:
-            normal_world = None
+        if nrm is None or np.array_equal(nrm, state.normal):
+            normal_world = None  # unperturbed: the world normal as interpolated, bit for bit
         elif self.rigid_identity[k]:
             normal_world = np.asarray(nrm, dtype=np.float64)
         else:

@@ -1063,7 +1063,10 @@ def _shading_normal(normal: Any, state: ShadingState) -> np.ndarray:
         raise ValueError(f"material_geometry.normal must give ({n}, 3) vectors, got {a.shape}")
     finite = np.all(np.isfinite(a), axis=1)
     a = np.where(finite[:, None], a, state.normal)  # NaN/inf rows: the unperturbed normal
-    return clamp_to_horizon(a, state.normal, HORIZON_MIN_COS)
+    # rows that are the unperturbed normal stay it bit for bit (a zero bump is no bump)
+    same = np.all(a == state.normal, axis=1)
+    return np.where(same[:, None], state.normal, clamp_to_horizon(a, state.normal,
+                                                                  HORIZON_MIN_COS))
 
 
 @dataclass(frozen=True, eq=False)
