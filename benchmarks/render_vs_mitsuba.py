@@ -322,6 +322,7 @@ def main(argv=None) -> int:
         geometry.embree = log.embree
         ours_rate = film.stats["samples_per_s"]
         general = Integrator(ours, geometry, path="general")
+        general.render(spp=1, progress=False)  # warm-up (its batch kernels compile once)
         general_rate = general.render(spp=args.spp, progress=False, threads=THREADS).stats[
             "samples_per_s"
         ]
