@@ -615,7 +615,7 @@ def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
 def eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, ix, iy, iz):
     """``(f0, f1, f2, pdf)`` of the program rooted at node ``root`` (its frames
     ``f0 .. f1 - 1``) at ``(wo, wi)`` in its shading frame."""
-    if code[root, SIZE] == 1:  # one df: its kernel alone (no passes, no frames)
+    if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df in the shading frame
         return leaf_eval_pdf(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
                              ox, oy, oz, ix, iy, iz)
     lo = root - code[root, SIZE] + 1
@@ -629,7 +629,7 @@ def eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, i
 def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1, u2x, u2y):
     """``(wi xyz, pdf, weight rgb, lobe)`` of the program rooted at ``root`` (lobe 0:
     failed); directions in its shading frame."""
-    if code[root, SIZE] == 1:  # one df: its kernel alone
+    if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df: its kernel alone
         return leaf_sample(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
                            ox, oy, oz, u1, u2x, u2y)
     n = code.shape[0]
