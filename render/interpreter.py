@@ -304,7 +304,7 @@ def _clamp_u(u):
 
 @njit
 def _agree(identity, w, wl):
-    """``LayerFrame.agree``: ``w`` strictly on one side of both tangent planes."""
+    """the layer frame's side test: ``w`` strictly on one side of both tangent planes."""
     if identity:
         return abs(w[2]) > COS_ZERO
     return w[2] * wl[2] > 0.0 and abs(wl[2]) > COS_ZERO and abs(w[2]) > COS_ZERO

@@ -16,7 +16,7 @@ modes) relative IOR ``eta = eta2 / eta1`` (rounded to 4 decimals), over:
 
 Each table column is the mean sample weight over the points of a 3-D Kronecker (R3)
 sequence pushed through the lobe's compiled ``sample`` kernel (the df module's
-``sample``, bit for bit the numpy class's), built on first use and cached for the
+``sample``, bit for bit the earlier numpy class's), built on first use and cached for the
 process, so only the roughness nodes a scene uses are ever computed.  Measured accuracy
 against quadrature and Monte Carlo: ``tests/render/df``.
 

@@ -3,7 +3,7 @@
 The compiled twins, one lane at a time, of :mod:`render.numerics`, :mod:`render.warp`,
 :mod:`render.frame` and :mod:`render.df._common`.  Each helper performs the same IEEE
 operations in the same order as the numpy function it names, so a kernel built from
-them agrees with its numpy class to the last bit (except where numpy's own SIMD
+them agrees with its earlier numpy class to the last bit (except where numpy's own SIMD
 ``exp``/``log``/``sin``/``cos``/``arctan2`` differ from the C library's in the last bit).
 Every helper is total: any finite input gives a finite output, never NaN, never an
 exception (guards as in the numpy code).

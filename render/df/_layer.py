@@ -107,10 +107,10 @@ _SIX_SEVENTHS = 6.0 / 7.0
 
 @njit
 def fresnel_curve(c, eta):
-    """:meth:`FresnelCurve.value` of one channel: dielectric ``F(eta, saturate(c))``.
+    """the Fresnel curve of one channel: dielectric ``F(eta, saturate(c))``.
 
     An ``eta`` that is not positive and finite, or whose square underflows (an ``ior <=
-    0`` the packer should have rejected, as the numpy class does) gives 1, the limit at
+    0`` the packer should have rejected, as the earlier numpy class does) gives 1, the limit at
     both ends, never NaN nor numba's ZeroDivisionError.
     """
     if not (eta > 0.0 and eta * eta > 0.0 and eta < math.inf):
@@ -120,7 +120,7 @@ def fresnel_curve(c, eta):
 
 @njit
 def fresnel_eta(ior, ior_outside, woz, flags):
-    """:meth:`FresnelCurve.eta` of one channel: ``ior / eta1`` from outside (``wo.z >= 0``
+    """the Fresnel curve's relative IOR of one channel: ``ior / eta1`` from outside (``wo.z >= 0``
     or thin-walled), ``eta2 / ior`` from inside, ``(eta1, eta2)`` the IOR pair of ``wo``'s
     side (both are ``ior_outside`` there: the layer's ``ior`` replaces the far side's)."""
     inside = woz < 0.0 and (flags & THIN_WALLED) == 0
@@ -143,7 +143,7 @@ def f82_curve1(c, r0, r90, f82, p):
 @njit
 def curve_geometry(refractive, flags, ior_outside, ior_inside, woz, wiz,
                    ox, oy, oz, ix, iy, iz):
-    """The cosines of :meth:`CurveLayer._curves`: ``(|wo.h|, nk1, nk2r)``.
+    """The cosines of the layer's curves: ``(|wo.h|, nk1, nk2r)``.
 
     ``woz``, ``wiz``: the inherited-frame ``wo.z``, ``wi.z`` (they tell reflection from
     transmission, and the IOR side); ``o``, ``i``: ``wo_L``, ``wi_L`` in the layer frame.

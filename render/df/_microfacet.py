@@ -65,7 +65,7 @@ _MODE_MASK, _THIN_WALLED = MODE_MASK, THIN_WALLED
 
 @njit
 def mf_p_reflect(mode, thin_walled, kh1, eta1, eta2):
-    """``MicrofacetBsdf._p_reflect``: probability of reflection given ``kh1 = wo.h``."""
+    """the microfacet reflection probability: probability of reflection given ``kh1 = wo.h``."""
     if mode == _REFLECT:
         return 1.0
     if mode == _TRANSMIT:
@@ -78,7 +78,7 @@ def mf_p_reflect(mode, thin_walled, kh1, eta1, eta2):
 
 @njit
 def mf_geometry(flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz):
-    """The first half of ``MicrofacetBsdf._kernel`` for an oriented lane (``wo.z >= 0``).
+    """The first half of the microfacet evaluation for an oriented lane (``wo.z >= 0``).
 
     Returns ``(ok, refr, hx, hy, hz, kh1, kh2, P, g1_1, G2)``: the half vector, its
     cosines with ``wo`` and (mirrored) ``wi``, the event probability and the v-cavities
@@ -124,7 +124,7 @@ def mf_geometry(flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz):
 
 @njit
 def mf_finish(D, refr, nk1, kh1, kh2, eta1, eta2, P, g1_1, G2, t0, t1, t2):
-    """The second half of ``MicrofacetBsdf._kernel``: ``D = D(h)`` -> ``(w0, w1, w2, pdf)``
+    """The second half of the microfacet evaluation: ``D = D(h)`` -> ``(w0, w1, w2, pdf)``
     (weight = eval / pdf; all 0 where the lobe does not reach)."""
     if refr:
         den = eta1 * kh1 + eta2 * kh2
@@ -144,7 +144,7 @@ def mf_finish(D, refr, nk1, kh1, kh2, eta1, eta2, P, g1_1, G2, t0, t1, t2):
 
 @njit
 def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1):
-    """``MicrofacetBsdf.sample`` from a half vector drawn from ``D (n.h)`` (local frame)
+    """microfacet sampling from a half vector drawn from ``D (n.h)`` (local frame)
     to ``wi``, for an oriented lane: the v-cavities flip, the event, reflect or refract.
 
     Returns ``(ok, wix, wiy, wiz)``.

@@ -29,7 +29,7 @@ tabulated (``_albedo``).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
 and :func:`albedo` (with the table arguments ``T, t`` of :func:`albedo_table`, as in
-``simple_glossy_bsdf``), bit for bit the numpy class's results
+``simple_glossy_bsdf``), bit for bit the earlier numpy class's results
 (``tests/render/df/test_backscattering_glossy_reflection_bsdf_kernels.py``).
 """
 
@@ -64,7 +64,7 @@ SIGNATURE = Signature("bsdf", (
     Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
     Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
-    # not implemented (as the numpy class): the packer refuses non-zero values
+    # not implemented (as the earlier numpy class did): the packer refuses non-zero values
     Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
     Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
     Param("handle", "string", "", uniform=True),
@@ -91,7 +91,7 @@ def _k_p_disk(x, y, e_u, e_v):
 
 @njit
 def _k_p_half(kx, ky, kz, hx, hy, hz, e_u, e_v, tx, ty):
-    """``BackscatteringGlossyReflectionBsdf._p_half`` for one lane."""
+    """the half-vector density for one lane."""
     kt = kx * tx + ky * ty
     kb = kx * ty - ky * tx
     ht = hx * tx + hy * ty

@@ -110,7 +110,7 @@ def _curve3(P, row, b, c):
 
 @njit
 def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """:meth:`CurveLayer._curves`: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
+    """the layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
     transmitted ``wi`` mirrored, no refraction half vector)."""
     kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
     h0, h1, h2 = _curve3(P, row, b, kh)
@@ -122,14 +122,14 @@ def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
 @njit
 def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                   wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """:meth:`CurveLayer._factors`: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
+    """the layer factors: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
     max(C(nk1), C(nk2), Ĉ(wo), Ĉ(wi)))`` per channel.
 
     ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
     curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
     disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
     ``wo`` or ``wi`` lies on different sides of the two tangent planes
-    (``LayerFrame.agree``, the interpreter's mask).
+    (the layer frame's side test, the interpreter's mask).
     """
     h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
                                      wilx, wily, wilz)
@@ -143,7 +143,7 @@ def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
 
 @njit
 def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """:meth:`CurveLayer._estimates`: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
+    """the layer estimates: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
     s = -1.0 if wolz < 0.0 else 1.0
     c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
     w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
@@ -168,7 +168,7 @@ def layer_possible(P, row, b, flags):
 @njit
 def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
     """``C(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
-    and ``wi_L``): what ``CurveAlbedo._deviation`` integrates."""
+    and ``wi_L``): what the Ĉ quadrature integrates."""
     h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
     return h0, h1, h2
 

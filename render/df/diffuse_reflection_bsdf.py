@@ -89,7 +89,7 @@ def _g_kernel(mu):
 
 @njit
 def _value(P, row, b, wox, woy, woz, wix, wiy, wiz):
-    """``DiffuseReflectionBsdf._value`` for an oriented ``wo`` -> ``(v0, v1, v2, valid)``:
+    """the diffuse sample weight for an oriented ``wo`` -> ``(v0, v1, v2, valid)``:
     the sample weight ``eval / pdf``."""
     t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
     sigma = P[row, b + _ROUGHNESS]

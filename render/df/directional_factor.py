@@ -58,7 +58,7 @@ _EXPONENT = SIGNATURE.offset("exponent")
 
 @njit
 def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
-    """:meth:`DirectionalFactor._scale`: ``C(wo.h)`` per channel, ``h`` the reflection half
+    """the directional factor: ``C(wo.h)`` per channel, ``h`` the reflection half
     vector (both directions mirrored to ``wo``'s side, then a transmitted ``wi`` through
     the tangent plane); 0 where ``wo.h < 0``."""
     s = -1.0 if woz < 0.0 else 1.0

@@ -64,7 +64,7 @@ __all__ = [
 # render.program, walks the tree, maps directions into the layer frame, looks up the
 # curve-weighted albedo Ĉ, applies the frame-agreement mask and sums).  One set of
 # kernels serves both forms: the float ior and weight are packed as grey colours.
-# ``ior`` must be > 0 (the numpy class raises; the packer should too): the kernels
+# ``ior`` must be > 0 (the earlier numpy class raises; the packer should too): the kernels
 # treat an ior <= 0 as an infinitely dense coat (F = 1), never NaN.
 
 
@@ -103,7 +103,7 @@ def _curve3(P, row, b, flags, woz, c):
 
 @njit
 def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """:meth:`CurveLayer._curves`: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2r))`` (6 floats)."""
+    """the layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2r))`` (6 floats)."""
     kh, nk1, nk2r = curve_geometry(True, flags, P[row, b + _IOR_OUTSIDE],
                                    P[row, b + _IOR_INSIDE], woz, wiz, ox, oy, oz, ix, iy, iz)
     h0, h1, h2 = _curve3(P, row, b, flags, woz, kh)
@@ -115,14 +115,14 @@ def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
 @njit
 def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                   wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """:meth:`CurveLayer._factors`: ``f_layer = w F(|wo.h|)``, ``f_base = max(0, 1 - w
+    """the layer factors: ``f_layer = w F(|wo.h|)``, ``f_base = max(0, 1 - w
     max(F(nk1), F(nk2r), Ĉ(wo), Ĉ(wi)))`` per channel.
 
     ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
     curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
     disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
     ``wo`` or ``wi`` lies on different sides of the two tangent planes
-    (``LayerFrame.agree``, the interpreter's mask).
+    (the layer frame's side test, the interpreter's mask).
     """
     h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
                                      wilx, wily, wilz)
@@ -136,7 +136,7 @@ def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
 
 @njit
 def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """:meth:`CurveLayer._estimates`: ``w F(nk1)`` and ``max(0, 1 - w max(F(nk1), Ĉ(wo)))``."""
+    """the layer estimates: ``w F(nk1)`` and ``max(0, 1 - w max(F(nk1), Ĉ(wo)))``."""
     s = -1.0 if wolz < 0.0 else 1.0
     nk1 = min(max(wolz * s, 0.0), 1.0)
     c0, c1, c2 = _curve3(P, row, b, flags, woz, nk1)
@@ -157,7 +157,7 @@ def layer_possible(P, row, b, flags):
 @njit
 def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
     """``F(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
-    and ``wi_L``): what ``CurveAlbedo._deviation`` integrates, the context of ``v``'s side."""
+    and ``wi_L``): what the Ĉ quadrature integrates, the context of ``v``'s side."""
     h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
     return h0, h1, h2
 

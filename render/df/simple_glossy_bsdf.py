@@ -33,7 +33,7 @@ Departures from libbsdf:
   table that the compensation would need).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
-and :func:`albedo` below, one lane at a time, bit for bit the numpy class's results
+and :func:`albedo` below, one lane at a time, bit for bit the earlier numpy class's results
 (``tests/render/df/test_simple_glossy_bsdf_kernels.py``).  :func:`albedo` takes two
 arguments beyond the kernel contract, the program's table array ``T`` and this node's
 offset ``t`` in it, filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why
@@ -81,7 +81,7 @@ SIGNATURE = Signature("bsdf", (
     Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
     Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
-    # not implemented (as the numpy class): the packer refuses non-zero values
+    # not implemented (as the earlier numpy class did): the packer refuses non-zero values
     Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
     Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
     Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
@@ -103,7 +103,7 @@ _MODE_MASK_, _REFLECT_, _THIN_ = MODE_MASK, REFLECT, THIN_WALLED
 
 @njit
 def as_exponents(ru, rv):
-    """``AshikhminShirley.__init__``: ``(e_u, e_v, norm)`` (roughness clamped at 1e-7)."""
+    """Ashikhmin–Shirley's exponents: ``(e_u, e_v, norm)`` (roughness clamped at 1e-7)."""
     ru = max(ru, kc.ROUGHNESS_MIN)
     rv = max(rv, kc.ROUGHNESS_MIN)
     e_u = 2.0 / (ru * ru)
@@ -113,7 +113,7 @@ def as_exponents(ru, rv):
 
 @njit
 def as_d_cos(e_u, e_v, norm, ht, hb, hn):
-    """``AshikhminShirley.d_cos``: ``D(h) (n.h)`` in the anisotropy frame."""
+    """Ashikhmin–Shirley's density: ``D(h) (n.h)`` in the anisotropy frame."""
     s2 = ht * ht + hb * hb
     if not (hn > 0.0 and s2 < 1.0):
         return 0.0
@@ -143,7 +143,7 @@ def as_azimuth(e_u, e_v, u):
 
 @njit
 def as_sample(e_u, e_v, u0, u1):
-    """``AshikhminShirley.sample``: a half vector ``(ht, hb, hn)`` with density ``D (n.h)``."""
+    """Ashikhmin–Shirley sampling: a half vector ``(ht, hb, hn)`` with density ``D (n.h)``."""
     cp, sp = as_azimuth(e_u, e_v, u0)
     e = e_u * cp * cp + e_v * sp * sp
     # cos theta = (1 - u1)^(1/(e+1)); keep 1 - cos accurate for huge exponents
@@ -155,7 +155,7 @@ def as_sample(e_u, e_v, u0, u1):
 
 @njit
 def _setup(P, row, b, flags, flip):
-    """``MicrofacetBsdf._setup`` for one lane -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2)``."""
+    """the lane's setup for one lane -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2)``."""
     e_u, e_v, norm = as_exponents(P[row, b + _RU], P[row, b + _RV])
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
@@ -164,14 +164,14 @@ def _setup(P, row, b, flags, flip):
     o = P[row, b + _IOR_OUT]
     i = P[row, b + _IOR_IN]
     if not (o > 0.0 and i > 0.0):
-        ok = False  # not an IOR (the packer and the numpy class refuse it)
+        ok = False  # not an IOR (the packer and the earlier numpy class refuse it)
     eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_) != 0, True)
     return ok, e_u, e_v, norm, tx, ty, eta1, eta2
 
 
 @njit
 def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, ty, eta1, eta2):
-    """``MicrofacetBsdf._kernel`` for an oriented lane -> ``(w0, w1, w2, pdf)``."""
+    """the microfacet evaluation for an oriented lane -> ``(w0, w1, w2, pdf)``."""
     ok, refr, hx, hy, hz, kh1, kh2, p_ev, g1_1, g2 = mf_geometry(
         flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz)
     if not ok:

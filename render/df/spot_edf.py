@@ -89,7 +89,7 @@ def _pow(t, k):
 def _spot(P, row, b):
     """The lane's lobe -> ``(k, 1 - s, norm_eval, norm_pdf, ax, ay, az, valid)``:
     :class:`SpotEdf`'s constructor per lane (``valid`` False where ``global_frame`` maps
-    ``+z`` to a zero vector, which the numpy class rejects)."""
+    ``+z`` to a zero vector, which the earlier numpy class rejects)."""
     k = max(P[row, b + _EXPONENT], 0.0)
     spread = min(max(P[row, b + _SPREAD], kc.SPREAD_MIN), kc.PI)
     s = math.cos(0.5 * spread)
@@ -113,7 +113,7 @@ def _spot(P, row, b):
 
 @njit
 def _t(wox, woy, woz, ax, ay, az, oms):
-    """``SpotEdf._t``: ``max((c - s)/(1 - s), 0)`` and the emitting test."""
+    """the spot's cosine: ``max((c - s)/(1 - s), 0)`` and the emitting test."""
     dx = wox - ax
     dy = woy - ay
     dz = woz - az

@@ -47,7 +47,7 @@ _TINT = SIGNATURE.offset("tint")
 
 @njit
 def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
-    """:meth:`Tint._scale`: the tint, at every direction pair."""
+    """the tint factor: the tint, at every direction pair."""
     return P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
 
 
