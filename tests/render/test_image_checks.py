@@ -5,7 +5,9 @@ known power), spot emitters (``df::spot_edf``'s lobe and the spot light's smooth
 profile, integrated here over the emitter), layered materials in the white furnace, a
 constant texture against the constant, a zero bump against no bump, and a displaced
 square's depth against its height field.  Tolerances are four standard errors (pixels
-are independent samples) plus, where named, a deterministic bias bound.
+are independent samples) plus, where named, a deterministic bias bound.  Where Mitsuba 3
+has an equivalent (a power-mode quad, weighted layers of diffuse lobes, a hard-edged spot
+light), ``test_mitsuba_twins.py`` renders it beside ours.
 """
 
 from __future__ import annotations
