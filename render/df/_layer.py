@@ -92,7 +92,14 @@ from render.df import _kernel_common as kc
 from render.df._signature import THIN_WALLED
 from render.jit import njit
 
-__all__ = ["fresnel_curve", "fresnel_eta", "f82_curve1", "curve_geometry"]
+__all__ = [
+    "fresnel_curve",
+    "fresnel_eta",
+    "f82_curve1",
+    "curve_geometry",
+    "curve_factors",
+    "curve_estimates",
+]
 
 # --- scalar kernels shared by the layers and directional_factor (the compiled core) ---
 # The per-node factor math of weighted_layer, fresnel_layer, custom_curve_layer (and their
@@ -172,3 +179,23 @@ def curve_geometry(refractive, flags, ior_outside, ior_inside, woz, wiz,
     if refract and tr:
         nk2r = min(max(2.0 * kh * hz - nk1, 0.0), 1.0)
     return kh, nk1, nk2r
+
+
+@njit
+def curve_factors(w0, w1, w2, h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2):
+    """A curve layer's factors per channel from its weight ``w``, ``C(|wo.h|)`` (``h``),
+    ``max(C(nk1), C(nk2r))`` (``m``) and the curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)``:
+    ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w max(m, Ĉ(wo), Ĉ(wi)))``."""
+    m0 = max(m0, max(co0, ci0))
+    m1 = max(m1, max(co1, ci1))
+    m2 = max(m2, max(co2, ci2))
+    return (w0 * h0, w1 * h1, w2 * h2,
+            max(1.0 - w0 * m0, 0.0), max(1.0 - w1 * m1, 0.0), max(1.0 - w2 * m2, 0.0))
+
+
+@njit
+def curve_estimates(w0, w1, w2, c0, c1, c2, co0, co1, co2):
+    """A curve layer's expected factors at ``wo`` (for sampling): ``w C(nk1)`` and
+    ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``, from ``c = C(nk1)``."""
+    return (w0 * c0, w1 * c1, w2 * c2, max(1.0 - w0 * max(c0, co0), 0.0),
+            max(1.0 - w1 * max(c1, co1), 0.0), max(1.0 - w2 * max(c2, co2), 0.0))

@@ -41,7 +41,7 @@ factors are kept almost everywhere (measured in
 
 from __future__ import annotations
 
-from render.df._layer import curve_geometry, f82_curve1
+from render.df._layer import curve_estimates, curve_factors, curve_geometry, f82_curve1
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.program import O_CUSTOM_CURVE_LAYER, df_class
@@ -110,7 +110,7 @@ def _curve3(P, row, b, c):
 
 @njit
 def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """the layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
+    """The layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
     transmitted ``wi`` mirrored, no refraction half vector)."""
     kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
     h0, h1, h2 = _curve3(P, row, b, kh)
@@ -122,7 +122,7 @@ def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
 @njit
 def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                   wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """the layer factors: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
+    """The layer factors: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
     max(C(nk1), C(nk2), Ĉ(wo), Ĉ(wi)))`` per channel.
 
     ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
@@ -133,22 +133,17 @@ def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
     """
     h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
                                      wilx, wily, wilz)
-    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
-    m0 = max(m0, max(co0, ci0))
-    m1 = max(m1, max(co1, ci1))
-    m2 = max(m2, max(co2, ci2))
-    return (w0 * h0, w1 * h1, w2 * h2,
-            max(1.0 - w0 * m0, 0.0), max(1.0 - w1 * m1, 0.0), max(1.0 - w2 * m2, 0.0))
+    return curve_factors(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2],
+                         h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2)
 
 
 @njit
 def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """the layer estimates: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
+    """The layer estimates: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
     s = -1.0 if wolz < 0.0 else 1.0
     c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
-    w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
-    return (w0 * c0, w1 * c1, w2 * c2, max(1.0 - w0 * max(c0, co0), 0.0),
-            max(1.0 - w1 * max(c1, co1), 0.0), max(1.0 - w2 * max(c2, co2), 0.0))
+    return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
+                           P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
 
 
 @njit
