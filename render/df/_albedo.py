@@ -213,6 +213,24 @@ def node_table(cls: type, mode, roughness_u: float, roughness_v: float,
 
 
 @njit
+def _aniso_mu(y):
+    """Interval and fraction of ``y = sqrt(mu)`` among the anisotropic tables' nodes."""
+    j = 0
+    while j < N_MU_A - 2 and _MU_NODES_A[j + 1] <= y:
+        j += 1
+    return j, min(max((y - _MU_NODES_A[j]) / (_MU_NODES_A[j + 1] - _MU_NODES_A[j]), 0.0), 1.0)
+
+
+@njit
+def _phi_weight(phi, k):
+    """Weight of azimuth node ``k`` at ``phi`` (``E`` as ``sum_c a_c cos(2 c phi)``)."""
+    w = 0.0
+    for c in range(N_PHI):
+        w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
+    return w
+
+
+@njit
 def table_albedo(T, t, mu, phi, inside):
     """White albedo ``E`` from the node table at ``T[t:]`` (:func:`node_table`).
 
@@ -228,15 +246,10 @@ def table_albedo(T, t, mu, phi, inside):
         j = min(max(int(math.floor(y * (N_MU - 1))), 0), N_MU - 2)
         fx = min(max((y - j / (N_MU - 1)) / (1.0 / (N_MU - 1)), 0.0), 1.0)
         return (1.0 - fx) * T[base + j] + fx * T[base + j + 1]
-    j = 0
-    while j < N_MU_A - 2 and _MU_NODES_A[j + 1] <= y:
-        j += 1
-    fx = min(max((y - _MU_NODES_A[j]) / (_MU_NODES_A[j + 1] - _MU_NODES_A[j]), 0.0), 1.0)
+    j, fx = _aniso_mu(y)
     E = 0.0
     for k in range(N_PHI):
-        w = 0.0
-        for c in range(N_PHI):
-            w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
+        w = _phi_weight(phi, k)
         at = base + k * N_MU_A + j
         E += w * ((1.0 - fx) * T[at] + fx * T[at + 1])
     return E
@@ -359,15 +372,10 @@ def lane_table_albedo(T, t, mu, phi, inside, ru, rv, ior_outside, ior_inside):
         return (1.0 - fx) * v0 + fx * v1
     iu, fu = _locate1(math.sqrt(ru), _Y)
     iv, fv = _locate1(math.sqrt(rv), _Y)
-    j = 0
-    while j < N_MU_A - 2 and _MU_NODES_A[j + 1] <= y:
-        j += 1
-    fx = min(max((y - _MU_NODES_A[j]) / (_MU_NODES_A[j + 1] - _MU_NODES_A[j]), 0.0), 1.0)
+    j, fx = _aniso_mu(y)
     E = 0.0
     for k in range(N_PHI):
-        w = 0.0
-        for c in range(N_PHI):
-            w += math.cos(2.0 * (phi * c)) * _COS_INV[k, c]
+        w = _phi_weight(phi, k)
         v0 = v1 = 0.0
         for du in range(2):
             for dv in range(2):
