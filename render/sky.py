@@ -44,6 +44,14 @@ density).  :meth:`SunAndSky.pdf` is exactly the density of :meth:`SunAndSky.samp
 and :meth:`SunAndSky.eval` the analytic radiance, so estimates are unbiased whatever
 the table's resolution.
 
+Kernels: the per-direction math is written once, as numba scalar kernels that the
+path tracer's bounce kernel calls: :func:`sun_and_sky_eval` (radiance),
+:func:`sun_and_sky_pdf` and :func:`sun_and_sky_sample`, on the constants of
+:meth:`SunAndSky.kernel_params` (everything fixed per sky, the Perez coefficients and
+zenith values included) and the table ``SunAndSky._p``, ``._cdf``.  The numpy methods
+(:meth:`SunAndSky.eval`, ``sky``, ``sun``, ``pdf``, ``sample_direction``, ``sample_li``)
+and :func:`preetham_xyY` / :func:`xyY_to_linear_srgb` run these kernels over rows.
+
 Examples
 --------
 >>> sky = SunAndSky(sun_direction_from_angles(45.0, 0.0), turbidity=3.0)
@@ -61,13 +69,18 @@ import math
 import numpy as np
 
 from render._typing import Arr, ArrayLike, Rgb, Vec3
+from render.df import _kernel_common as kc
 from render.frame import Frame
+from render.jit import njit
 from render.lights import INFINITE_DISTANCE, Light, LightSample
 from render.numerics import luminance, safe_sqrt
-from render.warp import square_to_uniform_cone
 
 __all__ = [
     "SunAndSky",
+    "sun_and_sky_eval",
+    "sun_and_sky_pdf",
+    "sun_and_sky_sample",
+    "PARAMS_SIZE",
     "sun_direction_from_angles",
     "preetham_xyY",
     "xyY_to_linear_srgb",
@@ -135,13 +148,104 @@ def sun_direction_from_angles(elevation: float, azimuth: float) -> np.ndarray:
     return np.array([math.cos(e) * math.sin(a), math.sin(e), -math.cos(e) * math.cos(a)])
 
 
-def _perez(coef: np.ndarray, cos_theta: Arr, gamma: Arr, cos_gamma: Arr) -> Arr:
-    """Perez et al.'s ``F(theta, gamma)``; the first factor is 1 at the horizon (its limit)."""
-    a, b, c, d, e = coef
-    up = cos_theta > 0.0
-    # b < 0 for every valid turbidity: exp(b / cos) -> 0 at the horizon
-    grad = np.where(up, a * np.exp(b / np.where(up, cos_theta, 1.0)), 0.0)
-    return (1.0 + grad) * (1.0 + c * np.exp(d * gamma) + e * cos_gamma * cos_gamma)
+# --- the kernels' constants ----------------------------------------------------------------
+# SunAndSky.kernel_params() -> float64 vector of PARAMS_SIZE, read by the kernels below:
+#   0:3    sun direction (unit, toward the sun)
+#   3      cos alpha, alpha the sun's angular radius
+#   4      1 - cos alpha (without cancellation)
+#   5:8    sun radiance rgb (0 while the whole disk is below the horizon, or sun_scale = 0)
+#   8:11   the sun direction the sky is computed for (on the horizon during twilight)
+#   11     sky factor: RGB per kcd/m^2 (scale, sky_scale and twilight fade; 0: no sky)
+#   12:15  ground radiance rgb
+#   15     p_sun, the probability that sampling picks the sun's cone
+#   16:19  s, 19:22 t: the sun's frame (Frame.from_normal; its n is the sun direction)
+#   22:40  Preetham's sky, 6 per quantity Y, x, y: Perez A, B, C, D, E, then the zenith
+#          value over F(0, theta_sun)  (see _preetham_constants)
+# The table (p, cdf) is SunAndSky._p, ._cdf: 128 x 256 cells, row 0 at the zenith.
+_SUN, _COS_ALPHA, _ONE_MINUS_COS, _SUN_RADIANCE, _SKY_SUN = 0, 3, 4, 5, 8
+_SKY_FACTOR, _GROUND, _P_SUN, _FRAME_S, _FRAME_T, _PREETHAM = 11, 12, 15, 16, 19, 22
+PARAMS_SIZE = 40
+# which radiance _radiance_rows computes
+_PART_ALL, _PART_SKY, _PART_SUN = 0, 1, 2
+
+
+def _preetham_constants(theta_sun: float, turbidity: float) -> np.ndarray:
+    """The 18 constants of Preetham's sky for one sun zenith angle and turbidity: for
+    ``Y``, ``x``, ``y`` the Perez coefficients ``A..E`` (linear in ``T``) and the zenith
+    value (appendix of the paper) divided by ``F(0, theta_sun)``."""
+    t = float(turbidity)
+    ts = float(theta_sun)
+    chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * ts)
+    y_zenith = (4.0453 * t - 4.9710) * math.tan(chi) - 0.2155 * t + 2.4192
+    tv = np.array([t * t, t, 1.0])
+    sv = np.array([ts**3, ts**2, ts, 1.0])
+    zenith = {"Y": y_zenith, "x": float(tv @ _ZENITH_X @ sv), "y": float(tv @ _ZENITH_Y @ sv)}
+    q = np.empty(18)
+    for k, key in enumerate(("Y", "x", "y")):
+        coef = _PEREZ[key] @ np.array([t, 1.0])
+        q[6 * k : 6 * k + 5] = coef
+        q[6 * k + 5] = zenith[key] / _perez(*coef, 1.0, ts, math.cos(ts))
+    return q
+
+
+@njit
+def _perez(a, b, c, d, e, cos_theta, gamma, cos_gamma):
+    """Perez et al.'s ``F(theta, gamma)``; the first factor is 1 at the horizon (its
+    limit: ``b < 0`` for every valid turbidity, so ``exp(b / cos theta) -> 0``)."""
+    grad = a * math.exp(b / cos_theta) if cos_theta > 0.0 else 0.0
+    return (1.0 + grad) * (1.0 + c * math.exp(d * gamma) + e * cos_gamma * cos_gamma)
+
+
+@njit
+def _preetham(q, k, cos_theta, cos_gamma):
+    """Preetham's ``(Y, x, y)`` of one direction from the constants ``q[k:k + 18]``;
+    ``cos_theta`` below 0 reads 0 (the horizon)."""
+    ct = min(max(cos_theta, 0.0), 1.0)
+    cg = min(max(cos_gamma, -1.0), 1.0)
+    gamma = math.acos(cg)
+    big_y = q[k + 5] * _perez(q[k], q[k + 1], q[k + 2], q[k + 3], q[k + 4], ct, gamma, cg)
+    x = q[k + 11] * _perez(q[k + 6], q[k + 7], q[k + 8], q[k + 9], q[k + 10], ct, gamma, cg)
+    y = q[k + 17] * _perez(q[k + 12], q[k + 13], q[k + 14], q[k + 15], q[k + 16], ct, gamma, cg)
+    return big_y, x, y
+
+
+@njit
+def _xyY_to_rgb(x, y, big_y):  # noqa: N802
+    """CIE xyY to linear sRGB, negative components clipped to 0 (``y = 0``: black)."""
+    if not y > 1e-12:
+        return 0.0, 0.0, 0.0
+    k = big_y / y
+    cx = x * k
+    cz = (1.0 - x - y) * k
+    m = _XYZ_TO_RGB
+    r = m[0, 0] * cx + m[0, 1] * big_y + m[0, 2] * cz
+    g = m[1, 0] * cx + m[1, 1] * big_y + m[1, 2] * cz
+    b = m[2, 0] * cx + m[2, 1] * big_y + m[2, 2] * cz
+    return max(r, 0.0), max(g, 0.0), max(b, 0.0)
+
+
+@njit
+def _preetham_rows(q, cos_theta, cos_gamma):
+    """:func:`_preetham` of each row -> (3, n): Y, x, y."""
+    out = np.empty((3, len(cos_theta)))
+    for i in range(len(cos_theta)):
+        out[0, i], out[1, i], out[2, i] = _preetham(q, 0, cos_theta[i], cos_gamma[i])
+    return out
+
+
+@njit
+def _xyY_rows(x, y, big_y):  # noqa: N802
+    """:func:`_xyY_to_rgb` of each row -> (n, 3)."""
+    out = np.empty((len(x), 3))
+    for i in range(len(x)):
+        out[i, 0], out[i, 1], out[i, 2] = _xyY_to_rgb(x[i], y[i], big_y[i])
+    return out
+
+
+def _flat(*arrays) -> tuple[tuple[int, ...], list[np.ndarray]]:
+    """The broadcast shape of ``arrays`` and each as a contiguous float64 vector."""
+    b = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in arrays))
+    return b[0].shape, [np.ascontiguousarray(a.ravel()) for a in b]
 
 
 def preetham_xyY(cos_theta: ArrayLike, cos_gamma: ArrayLike, theta_sun: float,
@@ -169,22 +273,9 @@ def preetham_xyY(cos_theta: ArrayLike, cos_gamma: ArrayLike, theta_sun: float,
     >>> round(float(Y[0]), 4), round(float(x[0]), 5), round(float(y[0]), 5)
     (15.5007, 0.26674, 0.2772)
     """
-    t = float(turbidity)
-    ct = np.clip(np.asarray(cos_theta, dtype=np.float64), 0.0, 1.0)
-    cg = np.clip(np.asarray(cos_gamma, dtype=np.float64), -1.0, 1.0)
-    gamma = np.arccos(cg)
-    ts = float(theta_sun)
-    chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * ts)
-    y_zenith = (4.0453 * t - 4.9710) * math.tan(chi) - 0.2155 * t + 2.4192
-    tv = np.array([t * t, t, 1.0])
-    sv = np.array([ts**3, ts**2, ts, 1.0])
-    zenith = {"Y": y_zenith, "x": float(tv @ _ZENITH_X @ sv), "y": float(tv @ _ZENITH_Y @ sv)}
-    out = []
-    for key in ("Y", "x", "y"):
-        coef = _PEREZ[key] @ np.array([t, 1.0])
-        norm = _perez(coef, np.ones(1), np.array([ts]), np.array([math.cos(ts)]))[0]
-        out.append(zenith[key] * _perez(coef, ct, gamma, cg) / norm)
-    return out[0], out[1], out[2]
+    shape, (ct, cg) = _flat(cos_theta, cos_gamma)
+    out = _preetham_rows(_preetham_constants(theta_sun, turbidity), ct, cg)
+    return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)
 
 
 def xyY_to_linear_srgb(x: ArrayLike, y: ArrayLike, Y: ArrayLike) -> Rgb:  # noqa: N802, N803
@@ -195,13 +286,144 @@ def xyY_to_linear_srgb(x: ArrayLike, y: ArrayLike, Y: ArrayLike) -> Rgb:  # noqa
     >>> np.round(xyY_to_linear_srgb([0.3127], [0.3290], [1.0]), 3).tolist()   # D65 white
     [[1.0, 1.0, 1.0]]
     """
-    x = np.asarray(x, dtype=np.float64)
-    y = np.asarray(y, dtype=np.float64)
-    big_y = np.asarray(Y, dtype=np.float64)
-    ok = y > 1e-12
-    k = np.where(ok, big_y / np.where(ok, y, 1.0), 0.0)
-    xyz = np.stack([x * k, np.where(ok, big_y, 0.0), (1.0 - x - y) * k], axis=-1)
-    return np.maximum(xyz @ _XYZ_TO_RGB.T, 0.0)
+    shape, (x, y, big_y) = _flat(x, y, Y)
+    return _xyY_rows(x, y, big_y).reshape(*shape, 3)
+
+
+# --- the sun and sky, one direction at a time ------------------------------------------------
+
+
+@njit
+def _sky(params, dx, dy, dz):
+    """Radiance of the sky (``dy >= 0``) or the ground (``dy < 0``) along ``d`` -> rgb."""
+    if dy < 0.0:
+        return params[_GROUND], params[_GROUND + 1], params[_GROUND + 2]
+    f = params[_SKY_FACTOR]
+    if not f > 0.0:
+        return 0.0, 0.0, 0.0
+    cos_gamma = dx * params[_SKY_SUN] + dy * params[_SKY_SUN + 1] + dz * params[_SKY_SUN + 2]
+    big_y, x, y = _preetham(params, _PREETHAM, dy, cos_gamma)
+    return _xyY_to_rgb(x, y, max(big_y, 0.0) * f)
+
+
+@njit
+def _in_sun_cone(params, dx, dy, dz):
+    """Whether ``d`` is within the sun's angular radius (above the horizon or not)."""
+    c = dx * params[_SUN] + dy * params[_SUN + 1] + dz * params[_SUN + 2]
+    return c >= params[_COS_ALPHA]
+
+
+@njit
+def _sun(params, dx, dy, dz):
+    """Radiance of the sun disk along ``d`` -> rgb (0 below the horizon)."""
+    if dy >= 0.0 and _in_sun_cone(params, dx, dy, dz):
+        return params[_SUN_RADIANCE], params[_SUN_RADIANCE + 1], params[_SUN_RADIANCE + 2]
+    return 0.0, 0.0, 0.0
+
+
+@njit
+def sun_and_sky_eval(params, dx, dy, dz):
+    """Radiance along the unit direction ``d``: sky or ground plus sun -> ``(r, g, b)``."""
+    r, g, b = _sky(params, dx, dy, dz)
+    sr, sg, sb = _sun(params, dx, dy, dz)
+    return r + sr, g + sg, b + sb
+
+
+@njit
+def _cell(dx, dy, dz):
+    """Index of the table cell (uniform in ``cos theta`` and ``phi``) holding ``d``."""
+    row = min(max((1.0 - dy) * 0.5 * _TABLE_H, 0.0), _TABLE_H - 1.0)
+    u = 0.5 + math.atan2(dx, -dz) / (2.0 * math.pi)
+    col = min(max(u * _TABLE_W, 0.0), _TABLE_W - 1.0)
+    return int(row) * _TABLE_W + int(col)
+
+
+@njit
+def sun_and_sky_pdf(params, p, dx, dy, dz):
+    """Solid-angle density with which :func:`sun_and_sky_sample` picks the unit direction
+    ``d``: ``p_sun`` times the sun cone's uniform density plus ``1 - p_sun`` times the
+    table ``p``'s (a cell's probability over its solid angle ``4 pi / (128 256)``)."""
+    p_sun = params[_P_SUN]
+    sky = p[_cell(dx, dy, dz)] * (_TABLE_H * _TABLE_W / (4.0 * math.pi))
+    omc = params[_ONE_MINUS_COS]
+    cone = 0.0
+    if omc > 0.0 and _in_sun_cone(params, dx, dy, dz):
+        cone = 1.0 / (2.0 * math.pi * omc)
+    return p_sun * cone + (1.0 - p_sun) * sky
+
+
+@njit
+def sun_and_sky_sample(params, p, cdf, u1, u2):
+    """A unit direction of density :func:`sun_and_sky_pdf` from ``u1, u2`` in [0, 1) ->
+    ``(wx, wy, wz)``: ``u1 < p_sun`` picks the sun's cone (uniformly, ``u1`` rescaled),
+    else a table cell by ``cdf`` (``u1`` rescaled again for the azimuth in the cell)."""
+    u1 = kc.clamp_u(u1)
+    u2 = kc.clamp_u(u2)
+    p_sun = params[_P_SUN]
+    if u1 < p_sun or p_sun >= 1.0:  # render.warp.square_to_uniform_cone, to the sun's frame
+        u0 = u1 / p_sun
+        omc = params[_ONE_MINUS_COS]
+        z = 1.0 - u0 * omc
+        r = kc.safe_sqrt(u0 * omc * (1.0 + z))  # 1 - z^2 = (1 - z)(1 + z)
+        phi = 2.0 * math.pi * u2
+        lx = r * math.cos(phi)
+        ly = r * math.sin(phi)
+        s, t = _FRAME_S, _FRAME_T
+        return (lx * params[s] + ly * params[t] + z * params[_SUN],
+                lx * params[s + 1] + ly * params[t + 1] + z * params[_SUN + 1],
+                lx * params[s + 2] + ly * params[t + 2] + z * params[_SUN + 2])
+    uk = min(max((u1 - p_sun) / (1.0 - p_sun), 0.0), 1.0)
+    k = min(np.searchsorted(cdf, uk, side="right"), len(p) - 1)
+    lo = cdf[k - 1] if k > 0 else 0.0
+    pk = p[k]
+    du = min(max((uk - lo) / pk if pk > 0.0 else 0.5, 0.0), 1.0)
+    j, i = k // _TABLE_W, k % _TABLE_W
+    y = 1.0 - 2.0 * (j + u2) / _TABLE_H
+    phi = ((i + du) / _TABLE_W - 0.5) * 2.0 * math.pi
+    r = kc.safe_sqrt(1.0 - y * y)
+    return r * math.sin(phi), y, -r * math.cos(phi)
+
+
+# --- batch wrappers: the kernels over rows (the numpy API of SunAndSky) -----------------------
+
+
+@njit
+def _radiance_rows(params, d, part):
+    """Sky + sun, sky or sun (``part``) radiance of each row of ``d`` -> (n, 3)."""
+    out = np.empty((d.shape[0], 3))
+    for k in range(d.shape[0]):
+        dx, dy, dz = d[k, 0], d[k, 1], d[k, 2]
+        if part == _PART_SKY:
+            r, g, b = _sky(params, dx, dy, dz)
+        elif part == _PART_SUN:
+            r, g, b = _sun(params, dx, dy, dz)
+        else:
+            r, g, b = sun_and_sky_eval(params, dx, dy, dz)
+        out[k, 0], out[k, 1], out[k, 2] = r, g, b
+    return out
+
+
+@njit
+def _pdf_rows(params, p, d):
+    """:func:`sun_and_sky_pdf` of each row of ``d`` -> (n,)."""
+    out = np.empty(d.shape[0])
+    for k in range(d.shape[0]):
+        out[k] = sun_and_sky_pdf(params, p, d[k, 0], d[k, 1], d[k, 2])
+    return out
+
+
+@njit
+def _sample_rows(params, p, cdf, u):
+    """:func:`sun_and_sky_sample` of each row of ``u`` -> (n, 3)."""
+    out = np.empty((u.shape[0], 3))
+    for k in range(u.shape[0]):
+        out[k, 0], out[k, 1], out[k, 2] = sun_and_sky_sample(params, p, cdf, u[k, 0], u[k, 1])
+    return out
+
+
+def _rows(a, width: int) -> np.ndarray:
+    """``a`` as a C-contiguous float64 (n, width) array (one compiled variant per kernel)."""
+    return np.ascontiguousarray(np.asarray(a, dtype=np.float64).reshape(-1, width))
 
 
 def relative_air_mass(zenith: ArrayLike) -> np.ndarray:
@@ -352,6 +574,7 @@ class SunAndSky(Light):
         self.sun_radiance = self.sun_irradiance / (math.pi * math.sin(alpha) ** 2)
         # the sky: Preetham's with the sun clamped to the horizon, faded in twilight
         self._theta_sky = min(zenith, 0.5 * math.pi)
+        self._preetham = _preetham_constants(self._theta_sky, t)
         horizontal = np.array([self.sun_direction[0], 0.0, self.sun_direction[2]])
         hn = np.linalg.norm(horizontal)
         self._sky_sun = (self.sun_direction if elevation >= 0.0 or hn == 0.0
@@ -359,33 +582,41 @@ class SunAndSky(Light):
         fade = min(1.0, max(0.0, 1.0 - math.degrees(elevation) / TWILIGHT_END_DEG))
         # kcd/m^2 -> cd/m^2 -> RGB
         self._sky_factor = 1000.0 * scale * sky_scale * fade
+        self._sun_frame = Frame.from_normal(self.sun_direction[None])
         self.ground_radiance = np.zeros(3)  # the quadrature below reads the upper hemisphere
+        self.p_sun = 0.0  # set by _build_table (the sky alone does not read it)
         self.sky_irradiance = self._sky_horizontal_irradiance()
         sun_h = self.sun_irradiance * max(0.0, math.sin(elevation))
         self.ground_radiance = albedo * (sun_h + self.sky_irradiance) / math.pi
         self._build_table()
 
+    # ------------------------------------------------------------------ kernels
+    def kernel_params(self) -> np.ndarray:
+        """The constants of this sky for :func:`sun_and_sky_eval`, :func:`sun_and_sky_pdf`
+        and :func:`sun_and_sky_sample`: a float64 vector of :data:`PARAMS_SIZE` (layout in
+        the comment above ``PARAMS_SIZE``); the kernels also take the table ``self._p`` and
+        ``self._cdf``."""
+        f = self._sun_frame
+        params = np.concatenate([
+            self.sun_direction, [self.cos_sun_radius, self._one_minus_cos], self.sun_radiance,
+            self._sky_sun, [self._sky_factor], self.ground_radiance, [self.p_sun],
+            f.s[0], f.t[0], self._preetham,
+        ]).astype(np.float64)
+        assert params.shape == (PARAMS_SIZE,)
+        return params
+
     # ------------------------------------------------------------------ radiance
     def sky(self, d: Vec3) -> Rgb:
         """Radiance (n, 3) of the sky and the ground (no sun) along unit directions ``d``."""
-        d = np.asarray(d, dtype=np.float64)
-        n = len(d)
-        if self._sky_factor <= 0.0:
-            return np.broadcast_to(self.ground_radiance, (n, 3)) * (d[:, 1] < 0.0)[:, None]
-        up = d[:, 1] >= 0.0
-        big_y, x, y = preetham_xyY(d[:, 1], d @ self._sky_sun, self._theta_sky, self.turbidity)
-        rgb = xyY_to_linear_srgb(x, y, np.maximum(big_y, 0.0) * self._sky_factor)
-        return np.where(up[:, None], rgb, self.ground_radiance)
+        return _radiance_rows(self.kernel_params(), _rows(d, 3), _PART_SKY)
 
     def sun(self, d: Vec3) -> Rgb:
         """Radiance (n, 3) of the sun disk along unit directions ``d`` (0 below the horizon)."""
-        d = np.asarray(d, dtype=np.float64)
-        inside = (d @ self.sun_direction >= self.cos_sun_radius) & (d[:, 1] >= 0.0)
-        return inside[:, None] * self.sun_radiance
+        return _radiance_rows(self.kernel_params(), _rows(d, 3), _PART_SUN)
 
     def eval(self, d: np.ndarray) -> np.ndarray:
         """Radiance (n, 3) seen along directions ``d`` (n, 3): sky or ground plus sun."""
-        return self.sky(d) + self.sun(d)
+        return _radiance_rows(self.kernel_params(), _rows(d, 3), _PART_ALL)
 
     def _sky_horizontal_irradiance(self, nz: int = 256, nphi: int = 512) -> np.ndarray:
         """``∫ L_sky cos theta dω`` over the upper hemisphere (midpoint rule in cos theta, phi)."""
@@ -401,6 +632,8 @@ class SunAndSky(Light):
 
     # ------------------------------------------------------------------ sampling
     def _build_table(self) -> None:
+        """The sampling table ``_p``, ``_cdf`` (mean sky luminance of each cell plus 1 % of
+        the average) and ``p_sun``."""
         h, w = _TABLE_H, _TABLE_W
         # 2 x 2 points per cell, cells uniform in y = cos theta (row 0 at the top) and phi
         sub = np.array([0.25, 0.75])
@@ -426,48 +659,14 @@ class SunAndSky(Light):
             self.p_sun = 1.0
         else:
             self.p_sun = min(0.95, max(0.05, sun_power / (sun_power + sky_power)))
-        self._sun_frame = Frame.from_normal(self.sun_direction[None])
-
-    def _cells(self, d: Vec3) -> np.ndarray:
-        h, w = _TABLE_H, _TABLE_W
-        j = np.clip(((1.0 - d[:, 1]) * 0.5 * h).astype(np.int64), 0, h - 1)
-        u = 0.5 + np.arctan2(d[:, 0], -d[:, 2]) / (2.0 * math.pi)
-        i = np.clip((u * w).astype(np.int64), 0, w - 1)
-        return j * w + i
 
     def pdf(self, d: np.ndarray) -> np.ndarray:
         """Solid-angle density (n,) with which :meth:`sample_li` picks unit directions ``d``."""
-        d = np.asarray(d, dtype=np.float64)
-        sky = self._p[self._cells(d)] * (_TABLE_H * _TABLE_W / (4.0 * math.pi))
-        cone = (d @ self.sun_direction >= self.cos_sun_radius) / (
-            2.0 * math.pi * self._one_minus_cos)
-        return self.p_sun * cone + (1.0 - self.p_sun) * sky
+        return _pdf_rows(self.kernel_params(), self._p, _rows(d, 3))
 
     def sample_direction(self, u: np.ndarray) -> Vec3:
         """Directions (n, 3) distributed with density :meth:`pdf`, from ``u`` (n, 2) in [0, 1)."""
-        u = np.asarray(u, dtype=np.float64)
-        n = len(u)
-        wi = np.zeros((n, 3))
-        pick_sun = u[:, 0] < self.p_sun
-        if np.any(pick_sun):
-            us = u[pick_sun].copy()
-            us[:, 0] = us[:, 0] / self.p_sun
-            local = square_to_uniform_cone(us, self.cos_sun_radius)
-            f = self._sun_frame
-            wi[pick_sun] = local[:, :1] * f.s + local[:, 1:2] * f.t + local[:, 2:3] * f.n
-        rest = ~pick_sun
-        if np.any(rest):
-            uk = np.clip((u[rest, 0] - self.p_sun) / (1.0 - self.p_sun), 0.0, 1.0)
-            k = np.clip(np.searchsorted(self._cdf, uk, side="right"), 0, len(self._p) - 1)
-            lo = np.where(k > 0, self._cdf[np.maximum(k - 1, 0)], 0.0)
-            pk = self._p[k]
-            du = np.clip(np.where(pk > 0, (uk - lo) / np.where(pk > 0, pk, 1.0), 0.5), 0.0, 1.0)
-            j, i = np.divmod(k, _TABLE_W)
-            y = 1.0 - 2.0 * (j + u[rest, 1]) / _TABLE_H
-            phi = ((i + du) / _TABLE_W - 0.5) * 2.0 * math.pi
-            r = safe_sqrt(1.0 - y * y)
-            wi[rest] = np.stack([r * np.sin(phi), y, -r * np.cos(phi)], axis=1)
-        return wi
+        return _sample_rows(self.kernel_params(), self._p, self._cdf, _rows(u, 2))
 
     def sample_li(self, p, u):
         wi = self.sample_direction(u)

@@ -1,6 +1,7 @@
 """The sun-and-sky environment: Preetham's formulas by hand, the pdf integrates to 1,
 sampling follows the pdf (chi-square), the sun's irradiance is E cos(zenith), no NaN at
-the zenith / horizon / below it, and a rendered diffuse plane gets the analytic irradiance."""
+the zenith / horizon / below it, the scalar kernels called one direction at a time are the
+methods, and a rendered diffuse plane gets the analytic irradiance."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.stats import chi2 as chi2_dist
 from scipy.stats import kstest
 
@@ -15,8 +18,12 @@ from render.frame import Frame
 from render.integrator import render
 from render.scene import SceneError, parse_scene
 from render.sky import (
+    PARAMS_SIZE,
     RGB_UNIT_CONVERSION,
     SunAndSky,
+    sun_and_sky_eval,
+    sun_and_sky_pdf,
+    sun_and_sky_sample,
     preetham_xyY,
     relative_air_mass,
     sun_color,
@@ -172,7 +179,8 @@ def test_no_nan_at_zenith_horizon_and_below(elevation, rng):
 @pytest.mark.parametrize(
     "elevation, kwargs",
     [(45.0, {}), (90.0, {}), (0.0, {}), (-3.0, {}), (30.0, {"sky_scale": 0.0}),
-     (20.0, {"sun_radius": 5.0, "turbidity": 8.0}), (-30.0, {"ground_albedo": 0.0})],
+     (30.0, {"sun_scale": 0.0}), (20.0, {"sun_radius": 5.0, "turbidity": 8.0}),
+     (-30.0, {"ground_albedo": 0.0})],
 )
 def test_pdf_integrates_to_one(elevation, kwargs):
     sky = SunAndSky(sun_direction_from_angles(elevation, 25.0), **kwargs)
@@ -211,7 +219,8 @@ def _chi2(sky: SunAndSky, n: int, rng, nz=16, nphi=32):
 @pytest.mark.parametrize(
     "elevation, kwargs",
     [(45.0, {}), (90.0, {"turbidity": 2.0}), (0.0, {}), (-3.0, {}),
-     (20.0, {"sun_radius": 5.0, "turbidity": 8.0})],
+     (20.0, {"sun_radius": 5.0, "turbidity": 8.0}), (30.0, {"sky_scale": 0.0}),
+     (60.0, {"sun_scale": 0.0})],
 )
 def test_sampling_matches_pdf_chi2(elevation, kwargs, rng):
     sky = SunAndSky(sun_direction_from_angles(elevation, 130.0), **kwargs)
@@ -249,6 +258,103 @@ def test_estimator_gives_the_horizontal_irradiance(elevation, rng):
     fine = _sphere_integral(sky, lambda d: sky.sky(d) * np.maximum(d[:, 1:2], 0.0),
                             n_theta=1024, n_phi=2048)
     assert np.allclose(sky.sky_irradiance, fine, rtol=2e-3)
+
+
+# ------------------------------------------------------------------------------ kernels
+# sun high, on the horizon, below it (twilight, night), and each part alone
+KERNEL_SKIES = [(60.0, {}), (0.0, {}), (-3.0, {}), (-30.0, {}), (30.0, {"sky_scale": 0.0}),
+                (30.0, {"sun_scale": 0.0}), (30.0, {"sky_scale": 0.0, "ground_albedo": 0.0})]
+ONE_MINUS_EPS = 1 - 2**-53
+
+
+def _kernels(sky: SunAndSky, d, u):
+    """The three kernels called from Python one direction (one u) at a time."""
+    params, p, cdf = sky.kernel_params(), sky._p, sky._cdf
+    radiance = np.array([sun_and_sky_eval(params, *row) for row in d])
+    pdf = np.array([sun_and_sky_pdf(params, p, *row) for row in d])
+    wi = np.array([sun_and_sky_sample(params, p, cdf, *row) for row in u])
+    return radiance, pdf, wi
+
+
+@pytest.mark.parametrize("elevation, kwargs", KERNEL_SKIES)
+def test_kernels_one_direction_at_a_time_are_the_methods(elevation, kwargs, rng):
+    sky = SunAndSky(sun_direction_from_angles(elevation, 70.0), **kwargs)
+    params = sky.kernel_params()
+    assert params.shape == (PARAMS_SIZE,) and params.dtype == np.float64
+    assert np.array_equal(params[:3], sky.sun_direction) and params[15] == sky.p_sun
+    # on the horizon exactly (both signs of zero), the poles, at and around the sun, random
+    ring = np.linspace(0.0, 2 * np.pi, 9)
+    horizon = np.stack([np.sin(ring), np.zeros(9), -np.cos(ring)], axis=1)
+    edge = math.acos(sky.cos_sun_radius) * np.array([0.999, 1.001])
+    f = Frame.from_normal(sky.sun_direction[None])
+    rim = np.cos(edge)[:, None] * sky.sun_direction + np.sin(edge)[:, None] * f.s[0]
+    d = np.concatenate([horizon, [[0, -0.0, 1.0], [0, 1.0, 0], [0, -1.0, 0]],
+                        [sky.sun_direction, -sky.sun_direction], rim, rng.normal(size=(40, 3))])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    edges = [0.0, ONE_MINUS_EPS, 1.0, sky.p_sun, np.nextafter(sky.p_sun, 0.0)]
+    u = np.concatenate([[[a, b] for a in edges for b in (0.0, ONE_MINUS_EPS)], rng.random((40, 2))])
+    radiance, pdf, wi = _kernels(sky, d, u)
+    assert np.allclose(radiance, sky.eval(d), rtol=1e-13, atol=0)
+    assert np.allclose(radiance, sky.sky(d) + sky.sun(d), rtol=1e-13, atol=0)
+    assert np.allclose(pdf, sky.pdf(d), rtol=1e-13, atol=0)
+    assert np.allclose(wi, sky.sample_direction(u), rtol=1e-13, atol=1e-15)
+    for v in (radiance, pdf, wi):
+        assert np.all(np.isfinite(v))
+    # a density wherever there is light (only a sun with no sky and a black ground: p_sun
+    # = 1, and nothing outside the disk)
+    assert np.all(radiance >= 0) and np.all(pdf[radiance.max(axis=1) > 0] > 0)
+    assert np.all(pdf > 0) or sky.p_sun == 1.0
+    assert np.allclose(np.linalg.norm(wi, axis=1), 1.0)
+    # the sampled directions have a density: the pdf there is that of the methods
+    assert np.all(sky.pdf(wi) > 0)
+
+
+@pytest.mark.parametrize("elevation, kwargs", KERNEL_SKIES[:4])
+def test_kernel_pdf_is_the_table_cell_by_cell_and_integrates_to_one(elevation, kwargs):
+    sky = SunAndSky(sun_direction_from_angles(elevation, -40.0), **kwargs)
+    params, p = sky.kernel_params(), sky._p
+    # at the centre of table cell k (row k // 256 from the zenith down, uniform in cos
+    # theta; column k % 256 from azimuth -180): (1 - p_sun) p_k over the cell's solid angle
+    h, w = 128, 256
+    y = 1 - 2 * (np.arange(h) + 0.5) / h
+    phi = ((np.arange(w) + 0.5) / w - 0.5) * 2 * np.pi
+    yy, pp = np.meshgrid(y, phi, indexing="ij")
+    r = np.sqrt(1 - yy * yy)
+    d = np.stack([r * np.sin(pp), yy, -r * np.cos(pp)], axis=-1).reshape(-1, 3)
+    outside = d @ sky.sun_direction < sky.cos_sun_radius
+    pdf = np.array([sun_and_sky_pdf(params, p, *row) for row in d[outside]])
+    want = (1 - sky.p_sun) * p[outside] * (h * w) / (4 * np.pi)
+    assert np.allclose(pdf, want, rtol=1e-12, atol=0)
+    # the whole sphere, the sun disk resolved
+    assert _sphere_integral(sky, sky.pdf) == pytest.approx(1.0, abs=2e-3)
+
+
+_SKIES = {}
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.sampled_from(range(len(KERNEL_SKIES))),
+    st.floats(-1.0, 1.0), st.floats(-np.pi, np.pi),
+    st.floats(0.0, 1.0), st.floats(0.0, 1.0),
+)
+def test_kernels_are_total(which, cos_theta, phi, u1, u2):
+    """Any direction (the horizon and the poles included) and any u in [0, 1]: finite,
+    radiance >= 0, pdf > 0 where there is light, a unit sample whose pdf is > 0."""
+    if which not in _SKIES:
+        elevation, kwargs = KERNEL_SKIES[which]
+        _SKIES[which] = SunAndSky(sun_direction_from_angles(elevation, 10.0), **kwargs)
+    sky = _SKIES[which]
+    params, p, cdf = sky.kernel_params(), sky._p, sky._cdf
+    r = math.sqrt(max(0.0, 1 - cos_theta * cos_theta))
+    d = (r * math.sin(phi), cos_theta, -r * math.cos(phi))
+    radiance = sun_and_sky_eval(params, *d)
+    pdf = sun_and_sky_pdf(params, p, *d)
+    assert all(math.isfinite(c) and c >= 0 for c in radiance) and math.isfinite(pdf)
+    assert pdf > 0 or (max(radiance) == 0 and sky.p_sun == 1.0)
+    wi = sun_and_sky_sample(params, p, cdf, u1, u2)
+    assert all(math.isfinite(c) for c in wi) and math.isclose(math.hypot(*wi), 1.0, rel_tol=1e-12)
+    assert sun_and_sky_pdf(params, p, *wi) > 0
 
 
 def test_bad_arguments():
