@@ -13,12 +13,9 @@ For each it measures
   our BVH build are excluded).  Mitsuba renders the very triangles we trace (our
   tessellation, vertex normals included), and, for scale, its analytic sphere and
   rectangles;
-* ours with the compiled kernels (:mod:`render.compiled`, the default for these scenes)
-  and with the general numpy path, which renders the same image;
-* the share of our render time spent inside Embree (``scene.run``), and the **Embree
-  ceiling**: every ray of our timed render recorded and traced again through embreex
-  alone, on two threads, with no shading at all: the samples per second no tracer
-  built on embreex can pass with this many rays per sample;
+* the share of our threads' time spent in the Embree stages of the compiled core
+  (:func:`render.path.intersect` and :func:`render.path.shadow_trace`, which do nothing
+  but call ``rtcIntersect1``/``rtcOccluded1``), and rays per sample;
 * equal-time error: both render for the same wall time, and their RMSE against a
   converged reference (``--ref-spp``) is compared: Mitsuba's for the diffuse and glossy
   stages (the same model); for the layered and mixed stages, whose models differ in
@@ -37,9 +34,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so")
@@ -244,36 +239,6 @@ def same_triangles(mi, md, geometry, names):
 THREADS = 2
 
 
-class RayLog:
-    """Records every ``scene.run`` call of an Embree scene, to trace them again alone."""
-
-    def __init__(self, embree):
-        self.embree = embree
-        self.calls = []
-        self._lock = threading.Lock()
-
-    def run(self, origins, directions, **kw):
-        with self._lock:
-            self.calls.append((origins.copy(), directions.copy(), kw))
-        return self.embree.run(origins, directions, **kw)
-
-    @property
-    def rays(self) -> int:
-        return sum(len(c[0]) for c in self.calls)
-
-    def replay(self, threads: int = 2) -> float:
-        """Seconds to trace the recorded calls again, spread over ``threads`` threads."""
-
-        def trace(calls):
-            for o, d, kw in calls:
-                self.embree.run(o, d, **kw)
-
-        t0 = time.perf_counter()
-        with ThreadPoolExecutor(threads) as pool:
-            list(pool.map(trace, [self.calls[i::threads] for i in range(threads)]))
-        return time.perf_counter() - t0
-
-
 def simd_flags() -> str:
     """avx2 / avx512f as ``lscpu`` reports them (Mitsuba's vector width follows them)."""
     import subprocess
@@ -316,19 +281,9 @@ def main(argv=None) -> int:
         for sc in (mi_tri, mi_analytic):
             mitsuba_render(mi, sc, 4, 0)  # JIT warm-up
         integ.render(spp=1, progress=False)  # warm-up
-        log = RayLog(geometry.embree)
-        geometry.embree = log
         film = integ.render(spp=args.spp, progress=False, threads=THREADS)
-        geometry.embree = log.embree
         ours_rate = film.stats["samples_per_s"]
-        general = Integrator(ours, geometry, path="general")
-        general.render(spp=1, progress=False)  # warm-up (its batch kernels compile once)
-        general_rate = general.render(spp=args.spp, progress=False, threads=THREADS).stats[
-            "samples_per_s"
-        ]
-        ceiling = pixels * args.spp / log.replay(THREADS)
-        rays_per_sample = log.rays / (pixels * args.spp)
-        del log
+        rays_per_sample = film.stats["rays"] / (pixels * args.spp)
         embree_share = film.stats["embree_time_s"] / (THREADS * film.stats["time_s"])
         mi_spp = max(4, args.spp * 4)
         mi_rate = pixels * mi_spp / mitsuba_render(mi, mi_tri, mi_spp, 1)[1]
@@ -347,12 +302,9 @@ def main(argv=None) -> int:
                 kind,
                 f"{rays_per_sample:.2f}",
                 f"{ours_rate / 1e6:.3f}",
-                f"{general_rate / 1e6:.3f}",
-                f"{ceiling / 1e6:.2f}",
                 f"{mi_rate / 1e6:.2f}",
                 f"{mi_analytic_rate / 1e6:.2f}",
                 f"{ours_rate / mi_rate:.3f}",
-                f"{ceiling / mi_rate:.2f}",
                 f"{embree_share:.0%}",
                 f"{eq_ours.stats['spp']} ({eq_ours.stats['time_s']:.1f})",
                 f"{np.sqrt(np.mean((ours_rgb - ref) ** 2)):.4f}",
@@ -365,12 +317,9 @@ def main(argv=None) -> int:
         "scene",
         "rays/sample",
         "ours Msamples/s",
-        "ours, general path",
-        "Embree ceiling",
         "Mitsuba, same triangles",
         "Mitsuba, analytic shapes",
         "ours / Mitsuba",
-        "ceiling / Mitsuba",
         "thread time in Embree",
         "equal time: ours spp (s)",
         "ours RMSE",

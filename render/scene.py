@@ -330,9 +330,6 @@ class Geometry:
 
     @classmethod
     def build(cls, scene: Scene, progress: bool = False) -> Geometry:
-        from embreex import rtcore_scene
-        from embreex.mesh_construction import TriangleMesh
-
         parts = []
         stats = []
         for obj in scene.objects:
@@ -363,15 +360,9 @@ class Geometry:
         face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
         lo, hi = vertices.min(axis=0), vertices.max(axis=0)
         extent = float(np.linalg.norm(hi - lo)) or 1.0
-        embree = rtcore_scene.EmbreeScene()
-        for p in parts:
-            v32 = np.ascontiguousarray(p[0], dtype=np.float32)
-            f32 = np.ascontiguousarray(p[1], dtype=np.int32)
-            TriangleMesh(embree, v32, f32)
-        # one tiny run builds the BVH before any thread uses the scene
-        embree.run(
-            np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32) / np.float32(np.sqrt(3))
-        )
+        from render.embree import EmbreeScene
+
+        embree = EmbreeScene([(p[0], p[1]) for p in parts])
         return cls(
             embree,
             vertices,

@@ -22,7 +22,8 @@ whole path (Wilkie et al. 2014; pbrt-v4's ``VolPathIntegrator``)::
 with ``p_j(path)`` the product over the path's medium segments of
 ``sigma_t[j] T_j(t)`` (a scattering event at ``t``) or ``T_j(t_max)`` (no event before
 the surface), and ``f_i`` the product of ``sigma_s[i] T_i(t)`` or ``T_i(t_max)``.
-:meth:`HomogeneousMedium.sample_distance` returns both per segment; the integrator
+:func:`free_flight` (and :meth:`HomogeneousMedium.sample_distance` over arrays) returns
+both per segment; the integrator
 keeps ``beta *= f / p[h]`` and ``r *= p / p[h]`` (``r[h] = 1``) and divides every
 contribution by ``mean(r)``.  The weight is bounded for the whole path
 (``f_i / mean_j p_j <= 3 f_i / p_i <= 3``), where per-segment channel MIS lets the
@@ -35,8 +36,9 @@ other channels; it is not used.
 
 The medium stack
 ----------------
-Each path lane keeps a small stack of the closed objects it is inside
-(:class:`MediumStack`): entering one pushes it with its IOR, leaving pops it.  The
+Each path lane keeps a small stack of the closed objects it is inside (rows of two
+arrays, object ids and IORs, with a size; :func:`stack_push`, :func:`stack_pop`,
+:func:`stack_outside_ior`): entering one pushes it with its IOR, leaving pops it.  The
 medium a segment travels through is the top of the stack; the IOR on the outside of
 an interface of object ``k`` is the IOR of the topmost entry that is not ``k`` (1 for
 air), so objects nested inside volumes (Handbook §5.8) see the right pair.
@@ -44,18 +46,24 @@ air), so objects nested inside volumes (Handbook §5.8) see the right pair.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from render._typing import Arr, Rgb
+from render.jit import njit
 
 __all__ = [
     "METERS_PER_SCENE_UNIT",
     "MAX_NESTING",
     "HomogeneousMedium",
     "DistanceSample",
-    "MediumStack",
+    "transmittance",
+    "free_flight",
+    "stack_push",
+    "stack_pop",
+    "stack_outside_ior",
     "medium_of",
     "is_closed",
 ]
@@ -185,12 +193,16 @@ class HomogeneousMedium:
             f"sigma_s={self.sigma_s.tolist()}, g={float(self.phase.directional_bias)})"
         )
 
+    @property
+    def row(self) -> np.ndarray:
+        """(9,) ``sigma_a``, ``sigma_s``, ``sigma_t``: the kernels' row of this medium."""
+        return np.concatenate([self.sigma_a, self.sigma_s, self.sigma_t])
+
     def transmittance(self, distance: Arr) -> Rgb:
         """``exp(-sigma_t d)`` per channel, (n, 3); ``d = inf`` gives 0 (or 1 where
         ``sigma_t = 0``)."""
-        d = np.asarray(distance, dtype=np.float64)[:, None]
-        tau = np.where(self.sigma_t > 0.0, self.sigma_t * np.minimum(d, 1e300), 0.0)
-        return np.exp(-tau)
+        d = np.asarray(distance, dtype=np.float64)
+        return _transmittance_batch(self.row[None], d)
 
     def sample_distance(self, t_max: Arr, hero: np.ndarray, u: Arr) -> DistanceSample:
         """Sample a free-flight distance with the hero channel's extinction.
@@ -221,20 +233,101 @@ class HomogeneousMedium:
         True
         """
         t_max = np.asarray(t_max, dtype=np.float64)
-        n = len(t_max)
-        if not self.scatters:
-            return DistanceSample(t_max.copy(), np.zeros(n, dtype=bool),
-                                  self.transmittance(t_max), np.ones((n, 3)))
-        sig = self.sigma_t[np.asarray(hero, dtype=np.int64)]
-        # -log(1 - u) / sigma: u < 1, so the log is finite; sigma 0 never scatters
-        t = np.where(sig > 0.0, -np.log1p(-np.asarray(u)) / np.where(sig > 0.0, sig, 1.0),
-                     np.inf)
-        scattered = t < t_max
-        t = np.where(scattered, t, t_max)
-        tr = self.transmittance(t)
-        value = np.where(scattered[:, None], self.sigma_s * tr, tr)
-        pdf = np.where(scattered[:, None], self.sigma_t * tr, tr)
-        return DistanceSample(t, scattered, value, pdf)
+        hero = np.broadcast_to(np.asarray(hero, dtype=np.int64), t_max.shape)
+        u = np.broadcast_to(np.asarray(u, dtype=np.float64), t_max.shape)
+        return DistanceSample(*_free_flight_batch(self.row[None], t_max, hero, u))
+
+
+# ------------------------------------------------------------------------ kernels
+@njit(inline="always")
+def transmittance(medium, m, c, length):
+    """``exp(-sigma_t length)`` in channel ``c`` of row ``m`` of a medium table
+    (``sigma_a, sigma_s, sigma_t`` per row; see :attr:`HomogeneousMedium.row`): 1 where
+    ``sigma_t`` is 0, also for an infinite length."""
+    st = medium[m, 6 + c]
+    return math.exp(-st * min(length, 1e300)) if st > 0.0 else 1.0
+
+
+@njit
+def free_flight(medium, m, hero, u, t_max):
+    """A free-flight distance in medium ``m`` drawn with the hero channel's extinction.
+
+    Returns ``(scattered, t, value rgb, pdf rgb)`` as :class:`DistanceSample` has them;
+    a medium that does not scatter is not sampled (``t = t_max``, ``value = T(t_max)``,
+    ``pdf = 1``)."""
+    if not (medium[m, 3] > 0.0 or medium[m, 4] > 0.0 or medium[m, 5] > 0.0):
+        return (False, t_max, transmittance(medium, m, 0, t_max),
+                transmittance(medium, m, 1, t_max), transmittance(medium, m, 2, t_max),
+                1.0, 1.0, 1.0)
+    sig = medium[m, 6 + hero]
+    # -log(1 - u) / sigma: u < 1, so the log is finite; sigma 0 never scatters
+    t = -math.log1p(-u) / sig if sig > 0.0 else np.inf
+    scattered = t < t_max
+    if not scattered:
+        t = t_max
+    tr0 = transmittance(medium, m, 0, t)
+    tr1 = transmittance(medium, m, 1, t)
+    tr2 = transmittance(medium, m, 2, t)
+    if scattered:
+        return (True, t, medium[m, 3] * tr0, medium[m, 4] * tr1, medium[m, 5] * tr2,
+                medium[m, 6] * tr0, medium[m, 7] * tr1, medium[m, 8] * tr2)
+    return False, t, tr0, tr1, tr2, tr0, tr1, tr2
+
+
+@njit
+def _transmittance_batch(medium, d):
+    out = np.empty((len(d), 3))
+    for i in range(len(d)):
+        for c in range(3):
+            out[i, c] = transmittance(medium, 0, c, d[i])
+    return out
+
+
+@njit
+def _free_flight_batch(medium, t_max, hero, u):
+    n = len(t_max)
+    t, scattered = np.empty(n), np.empty(n, dtype=np.bool_)
+    value, pdf = np.empty((n, 3)), np.empty((n, 3))
+    for i in range(n):
+        (scattered[i], t[i], value[i, 0], value[i, 1], value[i, 2], pdf[i, 0], pdf[i, 1],
+         pdf[i, 2]) = free_flight(medium, 0, hero[i], u[i], t_max[i])
+    return t, scattered, value, pdf
+
+
+@njit(inline="always")
+def stack_push(so, sior, i, n, obj, ior):
+    """Enter ``obj`` (with its IOR) on stack row ``i`` of size ``n``; returns the new
+    size (a full stack stays as it is)."""
+    if n < so.shape[1]:
+        so[i, n] = obj
+        sior[i, n] = ior
+        return n + 1
+    return n
+
+
+@njit(inline="always")
+def stack_pop(so, sior, i, n, obj):
+    """Leave ``obj``: remove its topmost entry from row ``i``, keeping the others'
+    order; returns the new size (unchanged if the row does not hold ``obj``)."""
+    for s in range(n - 1, -1, -1):
+        if so[i, s] == obj:
+            for q in range(s, n - 1):
+                so[i, q] = so[i, q + 1]
+                sior[i, q] = sior[i, q + 1]
+            so[i, n - 1] = -1
+            sior[i, n - 1] = 1.0
+            return n - 1
+    return n
+
+
+@njit(inline="always")
+def stack_outside_ior(so, sior, i, n, obj):
+    """The IOR around ``obj`` for row ``i``: its topmost entry that is not ``obj`` (1:
+    air)."""
+    for s in range(n - 1, -1, -1):
+        if so[i, s] != obj:
+            return sior[i, s]
+    return 1.0
 
 
 def medium_of(material) -> HomogeneousMedium | None:
@@ -284,122 +377,3 @@ def is_closed(vertices: np.ndarray, faces: np.ndarray, tolerance: float = 1e-7) 
     edges = np.sort(np.concatenate([g[:, [0, 1]], g[:, [1, 2]], g[:, [2, 0]]]), axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
     return bool(np.all(counts == 2))
-
-
-class MediumStack:
-    """Per-lane stacks of the closed objects a path is inside, with their IORs.
-
-    Parameters
-    ----------
-    n : int
-        Lanes (all start outside every object: the camera must be in air).
-    depth : int
-        Entries per lane (:data:`MAX_NESTING`; the integrator uses fewer when the scene
-        has fewer closed objects, none at all in a scene without any).
-
-    Attributes
-    ----------
-    objects : (n, depth) int32
-        Object indices, bottom first; -1 in unused slots.
-    ior : (n, depth) float64
-        The IOR of each entry (the material's ``ior`` averaged over channels, as
-        libbsdf does, at the point where the path entered).
-    size : (n,) int32
-        Entries in use.
-
-    Examples
-    --------
-    >>> s = MediumStack(2)
-    >>> s.push(np.array([True, True]), np.array([4, 4]), np.array([1.33, 1.33]))
-    >>> s.push(np.array([True, False]), np.array([7, 7]), np.array([1.5, 1.5]))
-    >>> s.top().tolist(), s.outside_ior(np.array([7, 4])).tolist()
-    ([7, 4], [1.33, 1.0])
-    >>> s.pop(np.array([True, True]), np.array([4, 4]))     # leave the outer one first
-    >>> s.top().tolist(), s.size.tolist()
-    ([7, -1], [1, 0])
-    """
-
-    def __init__(self, n: int, depth: int = MAX_NESTING):
-        self.objects = np.full((n, depth), -1, dtype=np.int32)
-        self.ior = np.ones((n, depth))
-        self.size = np.zeros(n, dtype=np.int32)
-
-    def __len__(self) -> int:
-        return len(self.size)
-
-    def take(self, index: np.ndarray) -> MediumStack:
-        """The stacks of lanes ``index`` (a copy)."""
-        out = MediumStack.__new__(MediumStack)
-        out.objects = self.objects[index]
-        out.ior = self.ior[index]
-        out.size = self.size[index]
-        return out
-
-    @staticmethod
-    def concatenate(stacks: list) -> MediumStack:
-        """The lanes of several stacks, in order (all of the same depth)."""
-        out = MediumStack.__new__(MediumStack)
-        out.objects = np.concatenate([s.objects for s in stacks])
-        out.ior = np.concatenate([s.ior for s in stacks])
-        out.size = np.concatenate([s.size for s in stacks])
-        return out
-
-    def copy(self) -> MediumStack:
-        """An independent copy."""
-        return self.take(np.arange(len(self)))
-
-    def top(self) -> np.ndarray:
-        """(n,) int: the innermost object of each lane (-1 outside every object)."""
-        if self.objects.shape[1] == 0:
-            return np.full(len(self), -1, dtype=np.int32)
-        rows = np.arange(len(self))
-        return np.where(self.size > 0, self.objects[rows, np.maximum(self.size - 1, 0)], -1)
-
-    def outside_ior(self, obj: np.ndarray) -> np.ndarray:
-        """(n,): the IOR around object ``obj[i]``: its topmost entry that is not that
-        object (1 when there is none)."""
-        depth = self.objects.shape[1]
-        if depth == 0:
-            return np.ones(len(self))
-        col = np.arange(depth)[None, :]
-        other = (self.objects != np.asarray(obj)[:, None]) & (col < self.size[:, None])
-        last = depth - 1 - np.argmax(other[:, ::-1], axis=1)
-        found = other.any(axis=1)
-        return np.where(found, self.ior[np.arange(len(self)), last], 1.0)
-
-    def push(self, mask: np.ndarray, obj: np.ndarray, ior: np.ndarray) -> None:
-        """Enter ``obj`` on lanes ``mask`` (lanes whose stack is full are left as they are)."""
-        depth = self.objects.shape[1]
-        lanes = np.flatnonzero(np.asarray(mask) & (self.size < depth))
-        if len(lanes) == 0:
-            return
-        slot = self.size[lanes]
-        self.objects[lanes, slot] = np.asarray(obj)[lanes]
-        self.ior[lanes, slot] = np.broadcast_to(np.asarray(ior, dtype=np.float64),
-                                                (len(self),))[lanes]
-        self.size[lanes] += 1
-
-    def pop(self, mask: np.ndarray, obj: np.ndarray) -> None:
-        """Leave ``obj`` on lanes ``mask``: remove its topmost entry (if any), keeping the
-        order of the others."""
-        lanes = np.flatnonzero(mask)
-        if len(lanes) == 0:
-            return
-        depth = self.objects.shape[1]
-        o = self.objects[lanes]
-        col = np.arange(depth)[None, :]
-        hit = (o == np.asarray(obj)[lanes, None]) & (col < self.size[lanes, None])
-        found = hit.any(axis=1)
-        if not found.any():
-            return
-        lanes, o, hit = lanes[found], o[found], hit[found]
-        last = depth - 1 - np.argmax(hit[:, ::-1], axis=1)
-        keep = (col < self.size[lanes, None]) & (col != last[:, None])
-        order = np.argsort(~keep, axis=1, kind="stable")
-        size = self.size[lanes] - 1
-        new_o = np.take_along_axis(o, order, axis=1)
-        new_i = np.take_along_axis(self.ior[lanes], order, axis=1)
-        unused = col >= size[:, None]
-        self.objects[lanes] = np.where(unused, -1, new_o)
-        self.ior[lanes] = np.where(unused, 1.0, new_i)
-        self.size[lanes] = size

@@ -63,13 +63,6 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-depth", type=int, metavar="N", help="longest path (-1: unlimited)")
     p.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"), help="image size")
     p.add_argument("--threads", type=int, default=2, metavar="N", help="worker threads (default 2)")
-    p.add_argument(
-        "--path",
-        choices=("auto", "general", "compiled"),
-        default="auto",
-        help="auto (default): the compiled kernels where the scene allows them (same image), "
-        "else the general numpy path; compiled fails where the scene does not allow them",
-    )
     p.add_argument("--half", action="store_true", help="write 16-bit half floats")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     add_profiles_option(p)
@@ -128,7 +121,7 @@ def run(args) -> int:
             scene.camera = dataclasses.replace(
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
-        if not args.quiet and args.path != "general":
+        if not args.quiet:
             _notice_first_compile()
         film = render(
             scene,
@@ -137,7 +130,6 @@ def run(args) -> int:
             progress=not args.quiet and sys.stderr.isatty(),
             threads=args.threads,
             denoise=args.denoise,
-            path=args.path,
         )
     except SceneReadError as e:
         print(str(e), file=sys.stderr)
@@ -158,13 +150,14 @@ def run(args) -> int:
     if not args.quiet:
         st = film.stats
         share = st["embree_time_s"] / (args.threads * st["time_s"]) if st["time_s"] else 0.0
-        path = st["path"] if st["path"] == "compiled" else f"general: {st['general_reason']}"
+        bound = st.get("bound_objects") or []
+        shaded = f"; shaded per hit in numpy: {', '.join(bound)}" if bound else ""
         wrote = f"wrote {Path(args.output)}" + (f" and {Path(args.png)}" if args.png else "")
         print(
             f"{wrote}: {film.width}x{film.height}, {st['spp']} spp in "
             f"{st['time_s']:.2f} s "
             f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {share:.0%} of thread time in "
-            f"Embree, {st['triangles']} triangles; {path} path)",
+            f"Embree, {st['triangles']} triangles{shaded})",
             file=sys.stderr,
         )
     return EXIT_OK

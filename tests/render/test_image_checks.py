@@ -30,7 +30,6 @@ from render.library.functions import (
 from render.lights import ConstantEnvironment, SpotLight
 from render.scene import RenderSettings, Scene, SceneObject, make_transform
 
-PATHS = ["general", "compiled"]
 D = M.df
 
 
@@ -79,8 +78,7 @@ def mean_and_error(img):
 
 
 # ---------------------------------------------------------------- power-mode emitters
-@pytest.mark.parametrize("path", PATHS)
-def test_power_mode_sphere_is_a_point_source_of_power_over_4pi(path):
+def test_power_mode_sphere_is_a_point_source_of_power_over_4pi():
     """A diffusely emitting sphere of total power P (``intensity_power``) irradiates a
     plane facing it, wherever the sphere is above the plane's horizon, exactly as a point
     source of intensity P / (4 pi) at its centre: E = P cos(theta) / (4 pi d^2)."""
@@ -90,7 +88,7 @@ def test_power_mode_sphere_is_a_point_source_of_power_over_4pi(path):
     res, ortho = 12, 1.6
     scene = Scene(top_camera(res, 0.5, ortho), [SceneObject(floor(), diffuse(rho)), sphere], [],
                   RenderSettings(res, res, spp=32, max_depth=2, seed=1))
-    img = render(scene, progress=False, path=path).rgb()
+    img = render(scene, progress=False).rgb()
     x, z = pixel_grid(res, ortho)
     d2 = x * x + z * z + h * h
     expected = pixel_mean(rho / math.pi * power * h / (4 * math.pi * d2**1.5), res)
@@ -102,8 +100,7 @@ def test_power_mode_sphere_is_a_point_source_of_power_over_4pi(path):
     assert err.max() < 0.05  # measured 0.024: a halved power would be over 10 errors away
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_power_mode_quad_irradiance(path):
+def test_power_mode_quad_irradiance():
     """A square emitter of side 2a and power P: radiance P / (pi A); below its centre at
     distance h, E = (P / A) * 4 F(a/h, a/h) (the rectangle form factor)."""
     power, rho, h, a = 6.0, 0.5, 1.0, 0.5
@@ -111,7 +108,7 @@ def test_power_mode_quad_irradiance(path):
                         name="light")
     scene = Scene(top_camera(16, 0.5, 0.01), [SceneObject(floor(), diffuse(rho)), light], [],
                   RenderSettings(16, 16, spp=16, max_depth=2, seed=2))
-    img = render(scene, progress=False, path=path).rgb()
+    img = render(scene, progress=False).rgb()
     x = a / h
     f = 2 * (x / math.sqrt(1 + x * x) * math.atan(x / math.sqrt(1 + x * x))) / (2 * math.pi)
     expected = rho / math.pi * power / (4 * a * a) * 4 * f
@@ -176,8 +173,7 @@ def test_spot_edf_profile_on_a_plane(exponent, spread_deg):
     assert outside.sum() > 20 and np.all(img[outside] == 0.0)
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_spot_light_smoothstep_profile(path):
+def test_spot_light_smoothstep_profile():
     """The spot light's intensity I smoothstep(cos cutoff, cos beam, cos theta) (pbrt),
     seen on a diffuse floor: E = I(theta) cos(theta)^3 / h^2."""
     I0, rho, h, cutoff, beam = 3.0, 0.8, 1.0, 30.0, 10.0
@@ -185,7 +181,7 @@ def test_spot_light_smoothstep_profile(path):
     res, ortho = 32, 1.4
     scene = Scene(top_camera(res, 0.5, ortho), [SceneObject(floor(), diffuse(rho))], [spot],
                   RenderSettings(res, res, spp=16, max_depth=2, seed=4))
-    img = render(scene, progress=False, path=path).rgb()[..., 1]
+    img = render(scene, progress=False).rgb()[..., 1]
     x, z = pixel_grid(res, ortho, sub=8)
     cos = h / np.sqrt(x * x + z * z + h * h)
     c0, c1 = math.cos(math.radians(cutoff)), math.cos(math.radians(beam))
@@ -213,8 +209,7 @@ def test_lossless_layers_vanish_in_the_white_furnace(name):
     """Layers of white, lossless dfs reflect everything: in a uniform white environment a
     convex object of such a material has radiance 1 everywhere (it disappears).
     (weighted_layer: eval = w layer + (1 - w) base, no directional loss; fresnel_layer
-    loses energy by design, see reference/mdl-distribution-functions.md §3.2.)  Rendered
-    on the path the renderer chooses for layers."""
+    loses energy by design, see reference/mdl-distribution-functions.md §3.2.)"""
     mat = M.material(surface=M.material_surface(LOSSLESS[name]()))
     cam = Camera(position=(0, 0, 4), look_at=(0, 0, 0), fov_y_deg=30, width=40, height=40)
     scene = Scene(cam, [SceneObject(UVSphere(1.0), mat)], [ConstantEnvironment(1.0)],

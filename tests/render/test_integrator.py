@@ -15,8 +15,6 @@ from render.integrator import Integrator, render
 from render.lights import ConstantEnvironment, DirectionalLight, PointLight, SpotLight
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
 
-#: both implementations for scenes the compiled path can render (render.compiled)
-PATHS = ["general", "compiled"]
 
 
 def diffuse(tint=1.0, **kw):
@@ -48,8 +46,7 @@ def mean_and_error(img: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return px.mean(axis=0), px.std(axis=0, ddof=1) / math.sqrt(len(px))
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_white_furnace_sphere_disappears(path):
+def test_white_furnace_sphere_disappears():
     # a white diffuse sphere in a uniform white environment: every pixel is 1 in expectation
     cam = Camera(position=(0, 0, 4), look_at=(0, 0, 0), fov_y_deg=30, width=64, height=64)
     scene = Scene(
@@ -58,7 +55,7 @@ def test_white_furnace_sphere_disappears(path):
         [ConstantEnvironment(1.0)],
         RenderSettings(64, 64, spp=8, max_depth=-1, rr_depth=5),
     )
-    film = render(scene, progress=False, path=path)
+    film = render(scene, progress=False)
     img = film.rgb()
     assert np.all(np.isfinite(img)) and img.min() >= 0
     sphere = film.alpha() > 0.999
@@ -69,8 +66,7 @@ def test_white_furnace_sphere_disappears(path):
     assert np.allclose(img[film.alpha() == 0], 1.0)
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_grey_furnace_matches_geometric_series(path):
+def test_grey_furnace_matches_geometric_series():
     # tint 0.5, unlimited depth, uniform environment 1: the sphere is convex, so every
     # bounce leaves it: L = 0.5 * 1 exactly (one bounce, then the environment)
     cam = Camera(position=(0, 0, 4), look_at=(0, 0, 0), fov_y_deg=30, width=48, height=48)
@@ -80,7 +76,7 @@ def test_grey_furnace_matches_geometric_series(path):
         [ConstantEnvironment(1.0)],
         RenderSettings(48, 48, spp=8, max_depth=-1),
     )
-    film = render(scene, progress=False, path=path)
+    film = render(scene, progress=False)
     sphere = film.alpha() > 0.999
     mean, err = mean_and_error(film.rgb()[sphere])
     assert np.all(np.abs(mean - 0.5) < 4 * err + 1e-3), (mean, err)
@@ -136,8 +132,7 @@ def test_directional_and_spot_lights():
     assert np.all(img[outside] == 0.0)
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_constant_environment_on_a_plane_mis(path):
+def test_constant_environment_on_a_plane_mis():
     # environment L over the upper hemisphere, diffuse rho: L_out = rho * L (direct only);
     # light sampling and BSDF sampling both contribute (MIS), so both weights are tested
     rho, le = 0.7, 1.3
@@ -147,7 +142,7 @@ def test_constant_environment_on_a_plane_mis(path):
         [ConstantEnvironment(le)],
         RenderSettings(32, 32, spp=16, max_depth=2),
     )
-    img = render(scene, progress=False, path=path).rgb()
+    img = render(scene, progress=False).rgb()
     mean, err = mean_and_error(img)
     assert np.all(np.abs(mean - rho * le) < 4 * err), (mean, err)
 
@@ -161,8 +156,7 @@ def _rect_form_factor(x: float, y: float) -> float:
 
 
 @pytest.mark.parametrize("half_size", [0.25, 2.0])
-@pytest.mark.parametrize("path", PATHS)
-def test_area_light_quad_irradiance(half_size, path):
+def test_area_light_quad_irradiance(half_size):
     # a diffuse emitter of radiance le, a square of side 2a at height h facing down:
     # E = pi le * 4 F(a/h, a/h) below its centre; L_out = rho/pi * E
     rho, le, h = 0.5, 2.0, 1.0
@@ -179,14 +173,13 @@ def test_area_light_quad_irradiance(half_size, path):
         [],
         RenderSettings(16, 16, spp=64, max_depth=2),
     )
-    img = render(scene, progress=False, path=path).rgb()
+    img = render(scene, progress=False).rgb()
     expected = rho * le * 4 * _rect_form_factor(a / h, a / h)
     mean, err = mean_and_error(img)
     assert np.all(np.abs(mean - expected) < 4 * err + 1e-4 * expected), (mean, err, expected)
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_emitter_seen_directly_and_from_behind(path):
+def test_emitter_seen_directly_and_from_behind():
     le = 3.0
     quad = SceneObject(
         Plane(size=(4, 4), origin=(-2, -2, 0)), emissive_material(np.full(3, np.pi * le))
@@ -195,7 +188,7 @@ def test_emitter_seen_directly_and_from_behind(path):
     back = Camera(position=(0, 0, -2), look_at=(0, 0, 0), width=8, height=8, fov_y_deg=20)
     for cam, value in ((front, le), (back, 0.0)):
         scene = Scene(cam, [quad], [], RenderSettings(8, 8, spp=2))
-        img = render(scene, progress=False, path=path).rgb()
+        img = render(scene, progress=False).rgb()
         assert np.allclose(img, value, rtol=1e-12)
 
 
@@ -312,8 +305,7 @@ def test_integrator_rejects_nothing_silently_on_empty_light_set():
     assert np.all(film.rgb() == 0.0) and film.alpha().max() == 1.0
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_world_space_is_the_objects_transform(path):
+def test_world_space_is_the_objects_transform():
     # Figure 9.8: space_as_color in world space differs from object space by the object's
     # transform.  A sphere moved by t = (0.65, 0.5, 0): frac(4 (p + t)) = frac(4 p + (2.6,
     # 2, 0)), so red shifts by 0.6 (mod 1) and green and blue stay (mod 1).
@@ -325,7 +317,7 @@ def test_world_space_is_the_objects_transform(path):
     def albedo(mode, transform):
         scene = Scene(cam, [SceneObject(UVSphere(0.5), space_as_color(mode, 4.0), transform)],
                       [ConstantEnvironment(1.0)], RenderSettings(24, 24, spp=1, max_depth=1))
-        film = render(scene, progress=False, aovs=["albedo"], path=path)
+        film = render(scene, progress=False, aovs=["albedo"])
         return film.aov("albedo")[film.alpha() > 0]
 
     moved = make_transform(translate=(0.65, 0.5, 0.0))

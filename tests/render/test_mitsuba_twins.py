@@ -21,9 +21,6 @@ helpers, loaded from that file) with one thing changed to the case checked:
   step at the cutoff).  It lights the stage with the lamp and the environment; the
   smoothstep ramp itself is checked by its closed form in ``test_image_checks.py``.
 
-Every scene runs on both of our paths (here they give the same image, bit for bit, so
-each catches a change to the other).
-
 Agreement measured with the scenes of these tests at 64 x 64, 4 seeds x 1024 spp (ours)
 against 4 x 4096 spp (Mitsuba): relative difference of the means over the whole image /
 floor / sphere (/ lamp), and the largest in standard errors of the difference (from the
@@ -73,7 +70,6 @@ from render.scene import Scene, SceneObject
 
 pytestmark = pytest.mark.mitsuba
 
-PATHS = ["general", "compiled"]
 OURS_SEEDS, OURS_SPP = (1, 2, 3, 4), 32
 MI_SEEDS, MI_SPP = (1, 2, 3, 4), 64
 #: standard errors allowed: region means, and 8 x 8 blocks (192 comparisons)
@@ -190,7 +186,7 @@ def _seeded(render_fn, seeds):
 @pytest.fixture(scope="module")
 def mitsuba_images(mi):
     """Mitsuba's image of a stage (mean and per-pixel variance), rendered once per module
-    (the same for both of our paths)."""
+    """
     cache = {}
 
     def get(name):
@@ -207,13 +203,13 @@ def _blocks(img):
     return img.reshape(8, RES // 8, 8, RES // 8, 3).mean(axis=(1, 3))
 
 
-def _compare(ours, twin, path):
+def _compare(ours, twin):
     """Our render of ``ours`` against ``twin`` (Mitsuba's mean image and its per-pixel
     variance): region means within K_REGION and 8 x 8 block means within K_BLOCK
     standard errors of their difference.  Returns {region: (ours, mitsuba, z)}."""
-    ids = render(ours, spp=1, progress=False, path=path, aovs=["object_id"]).aov("object_id")
-    a, va = _seeded(lambda seed: render(ours, spp=OURS_SPP, seed=seed, progress=False,
-                                        path=path).rgb(), OURS_SEEDS)
+    ids = render(ours, spp=1, progress=False, aovs=["object_id"]).aov("object_id")
+    a, va = _seeded(lambda seed: render(ours, spp=OURS_SPP, seed=seed, progress=False).rgb(),
+                    OURS_SEEDS)
     b, vb = twin
     assert np.all(np.isfinite(a)) and a.min() >= 0
     out = {}
@@ -234,25 +230,22 @@ def _compare(ours, twin, path):
     return out
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_power_mode_quad_vs_area_emitter(mi, mitsuba_images, path):
+def test_power_mode_quad_vs_area_emitter(mi, mitsuba_images):
     ours, _, _ = _power_stage(mi)
-    out = _compare(ours, mitsuba_images("power_quad"), path)
+    out = _compare(ours, mitsuba_images("power_quad"))
     # the lamp is in view (its pixels: the radiance P / (pi A) = 6, less at its edges)
     assert out["lamp"][0].min() > 4.0 and "sphere" in out
 
 
-@pytest.mark.parametrize("path", PATHS)
 @pytest.mark.parametrize("name", ["weighted_layer", "nested_weighted_layer"])
-def test_weighted_layer_of_diffuse_vs_blendbsdf(mi, mitsuba_images, name, path):
+def test_weighted_layer_of_diffuse_vs_blendbsdf(mi, mitsuba_images, name):
     ours, _, _ = STAGES[name](mi)
-    out = _compare(ours, mitsuba_images(name), path)
+    out = _compare(ours, mitsuba_images(name))
     # the sphere's colour is the layer's mix (red over blue at w = 0.35: blue wins)
     sphere = out["sphere"][0]
     assert (sphere[2] > sphere[0]) if name == "weighted_layer" else (sphere[0] > sphere[2])
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_hard_edged_spot_vs_spot_emitter(mi, mitsuba_images, path):
+def test_hard_edged_spot_vs_spot_emitter(mi, mitsuba_images):
     ours, _, _ = _spot_stage(mi)
-    _compare(ours, mitsuba_images("hard_spot"), path)
+    _compare(ours, mitsuba_images("hard_spot"))

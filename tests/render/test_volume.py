@@ -7,17 +7,27 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 import pytest
 import trimesh
 from scipy import stats
 
 from displacement.surfaces import Cube, Plane, UnitSquare, UVSphere
 from render import material as M
+from render import path
 from render.camera import Camera
 from render.integrator import Integrator, render
 from render.lights import ConstantEnvironment, DirectionalLight, PointLight
 from render.scene import RenderSettings, Scene, SceneObject, make_transform
-from render.volume import MAX_NESTING, HomogeneousMedium, MediumStack, is_closed, medium_of
+from render.volume import (
+    MAX_NESTING,
+    HomogeneousMedium,
+    is_closed,
+    medium_of,
+    stack_outside_ior,
+    stack_pop,
+    stack_push,
+)
 
 
 def medium_material(sigma_a=0.0, sigma_s=0.0, g=0.0, ior=1.0, mode="scatter_transmit",
@@ -124,34 +134,45 @@ def test_absorbing_only_medium_is_not_sampled():
 
 
 # ------------------------------------------------------------------ the medium stack
+def _stack_ops(ops, depth):
+    return _stack_run(np.array(ops, dtype=np.float64), depth)
+
+
+@njit
+def _stack_run(ops, depth):
+    """Run (kind, obj, ior) operations on one stack row: kind 0 push, 1 pop, 2 query the
+    IOR outside obj; returns the queries' answers and the final row."""
+    so = np.full((1, depth), -1, dtype=np.int64)
+    sior = np.ones((1, depth))
+    n = 0
+    out = []
+    for j in range(len(ops)):
+        kind, obj, ior = ops[j, 0], ops[j, 1], ops[j, 2]
+        if kind == 0:
+            n = stack_push(so, sior, 0, n, int(obj), ior)
+        elif kind == 1:
+            n = stack_pop(so, sior, 0, n, int(obj))
+        else:
+            out.append(stack_outside_ior(so, sior, 0, n, int(obj)))
+    return out, so[0, :n].copy(), sior[0, :n].copy()
+
+
 def test_medium_stack_nesting_and_removal():
-    s = MediumStack(3)
-    all3 = np.ones(3, dtype=bool)
-    s.push(all3, np.array([5, 5, 5]), 1.33)
-    s.push(np.array([True, True, False]), np.array([8, 8, 8]), np.array([1.5, 1.6, 9.0]))
-    s.push(np.array([True, False, False]), np.array([2, 2, 2]), 1.2)
-    assert s.top().tolist() == [2, 8, 5] and s.size.tolist() == [3, 2, 1]
+    push, pop, ask = 0, 1, 2
+    out, objs, iors = _stack_ops([(push, 5, 1.33), (push, 8, 1.5), (push, 2, 1.2),
+                                  (ask, 2, 0.0), (ask, 8, 0.0), (ask, 7, 0.0)], 3)
     # the IOR around object k: the innermost entry that is not k
-    assert s.outside_ior(np.array([2, 8, 5])).tolist() == [1.5, 1.33, 1.0]
-    assert s.outside_ior(np.array([7, 7, 7])).tolist() == [1.2, 1.6, 1.33]
-    # leaving the middle object keeps the order of the others
-    s.pop(all3, np.array([8, 8, 8]))
-    assert s.objects[0, :2].tolist() == [5, 2] and s.ior[0, :2].tolist() == [1.33, 1.2]
-    assert s.top().tolist() == [2, 5, 5] and s.size.tolist() == [2, 1, 1]
-    # popping an object the lane is not in changes nothing
-    s.pop(all3, np.array([9, 9, 9]))
-    assert s.size.tolist() == [2, 1, 1]
-    s.pop(all3, np.array([2, 5, 5]))
-    s.pop(all3, np.array([5, 5, 5]))
-    assert s.top().tolist() == [-1, -1, -1]
-    assert s.outside_ior(np.zeros(3, int)).tolist() == [1.0] * 3
-    # deeper than MAX_NESTING: further pushes are ignored, nothing overflows
-    d = MediumStack(1)
-    for k in range(MAX_NESTING + 3):
-        d.push(np.array([True]), np.array([k]), 1.0 + k)
-    assert d.size.tolist() == [MAX_NESTING] and d.top().tolist() == [MAX_NESTING - 1]
-    both = MediumStack.concatenate([s.take(np.array([0])), d])
-    assert both.top().tolist() == [-1, MAX_NESTING - 1]
+    assert out == [1.5, 1.2, 1.2] and objs.tolist() == [5, 8, 2]
+    # leaving the middle object keeps the order of the others; popping an object the
+    # lane is not in changes nothing
+    out, objs, iors = _stack_ops([(push, 5, 1.33), (push, 8, 1.5), (push, 2, 1.2),
+                                  (pop, 8, 0.0), (pop, 9, 0.0), (ask, 2, 0.0)], 3)
+    assert objs.tolist() == [5, 2] and iors.tolist() == [1.33, 1.2] and out == [1.33]
+    out, objs, _ = _stack_ops([(push, 5, 1.33), (pop, 5, 0.0), (ask, 0, 0.0)], 3)
+    assert objs.tolist() == [] and out == [1.0]
+    # deeper than the row: further pushes are ignored, nothing overflows
+    _, objs, _ = _stack_ops([(push, k, 1.0 + k) for k in range(MAX_NESTING + 3)], MAX_NESTING)
+    assert objs.tolist() == list(range(MAX_NESTING))
 
 
 def test_is_closed():
@@ -266,10 +287,11 @@ def test_point_light_inside_a_medium():
     assert np.allclose(img, want, rtol=2e-3), (img.mean(), want)
 
 
-def test_shadow_transmittance_fast_and_general_paths():
-    # Integrator._shadow over a segment inside a medium: exp(-sigma d) whether or not
-    # the scene has straight-through boundaries (the general loop) or not (one
-    # occlusion query times the origin's medium)
+def test_shadow_transmittance_inside_a_medium():
+    # a shadow record inside a medium reaches its light with exp(-sigma d), d the whole
+    # segment (offset included), whether the box's boundary lets shadow rays through
+    # (a null interface: the records are traced hit by hit) or not (one occlusion query
+    # times the origin's medium)
     sigma = (0.5, 1.0, 2.0)
     for mode in ("scatter_transmit", "scatter_reflect"):
         box = SceneObject(Cube(1.0), medium_material(sigma_a=sigma, mode=mode),
@@ -278,13 +300,19 @@ def test_shadow_transmittance_fast_and_general_paths():
         scene = Scene(cam, [box], [], RenderSettings(4, 4, spp=1))
         integ = Integrator(scene, scene.build())
         assert integ.null_candidate[0] == (mode == "scatter_transmit")
-        stack = MediumStack(2)
-        stack.push(np.ones(2, bool), np.zeros(2, dtype=np.int64), 1.0)
-        o = np.zeros((2, 3))
-        d = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-        T = integ._shadow(o, d, np.array([0.5, 1.5]), stack, np.random.default_rng(0),
-                          tail=np.array([0.25, 0.0]))
-        assert np.allclose(T, np.exp(-np.outer([0.75, 1.5], sigma)), rtol=1e-9)
+        sf = np.zeros((2, path.NSF))
+        sf[:, path.S_D:path.S_D + 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        sf[:, path.S_FAR] = [0.5, 1.5]
+        sf[:, path.S_TAIL] = [0.25, 0.0]
+        sf[:, path.S_C:path.S_C + 3] = 1.0
+        si = np.zeros((2, path.NSI), dtype=np.int64)
+        si[:, path.S_ID] = [0, 1]
+        si[:, path.S_FACE] = -1
+        si[:, path.S_NSTK] = 1
+        sso = np.zeros((2, integ.nesting), dtype=np.int64)  # inside object 0
+        L = np.zeros((2, 3))
+        integ._shadows(2, sf, si, sso, np.ones((2, integ.nesting)), np.random.default_rng(0), L)
+        assert np.allclose(L, np.exp(-np.outer([0.75, 1.5], sigma)), rtol=1e-9)
 
 
 def test_thin_walled_and_open_objects_enclose_no_medium():

@@ -1,0 +1,852 @@
+"""The path tracer's compiled stages: every ray through Embree, every vertex in numba.
+
+:class:`render.integrator.Integrator` runs a wavefront of path lanes per chunk of
+samples through three kernels, with no Python between them unless a material's
+arguments vary over the surface:
+
+1. :func:`intersect`: each lane's next segment through Embree (``rtcIntersect1`` from
+   :mod:`render.embree`).
+2. :func:`bounce`: what happens on the segment and at its end, per lane: free-flight
+   sampling in the lane's medium (spectral MIS over a hero channel), the environment on
+   escape, and at a surface the cutout decision, emission (MIS against light
+   sampling), alpha and AOVs, next-event estimation (a shadow record per lane), the
+   bsdf's sampled continuation, null crossings (index-matched or thin-walled straight
+   transmission: no vertex), the stack of closed objects the path is inside (their
+   media and IORs), and Russian roulette.  A scattering event in a medium is a vertex
+   with next-event estimation through the phase function and a phase-sampled
+   continuation.  Bsdfs are material programs run by :mod:`render.interpreter`.
+3. :func:`shadow_trace` and :func:`shadow_resolve`: the shadow records' segments, to
+   the light or through cutouts and null interfaces (entering and leaving media), each
+   attenuated by the media it runs through; what reaches the light is added to the
+   image.
+
+Where an object's material varies over the surface (textures, noise, bump, a varying
+cutout or emission), the integrator shades the lanes that hit it with numpy between
+stages 1 and 2 (``material.shade``) and hands the kernels a parameter row, a shading
+frame, an opacity, an IOR and an emitted radiance per lane ("bindings").  Lanes on
+objects whose arguments are constant never leave the kernels.
+
+Lane state lives in two arrays per lane (``lf`` floats, ``li`` integers; the column
+constants below) and the stack of closed objects in ``so`` (object ids) and ``sior``
+(their IORs).  Kernels return the lanes that go on, compacted in order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from render import embree, interpreter
+from render.bsdf import Lobe
+from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
+from render.df.anisotropic_vdf import sample as _phase_sample
+from render.jit import njit
+from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
+from render.volume import (
+    free_flight,
+    stack_outside_ior,
+    stack_pop,
+    stack_push,
+    transmittance,
+)
+
+__all__ = [
+    "Tables",
+    "intersect",
+    "bounce",
+    "shadow_trace",
+    "shadow_resolve",
+    "outside_ior",
+    "lane_count_columns",
+]
+
+INV_PI = 1.0 / np.pi
+#: distance of a light at infinity (render.lights.INFINITE_DISTANCE)
+INFINITE_DISTANCE = 1e30
+#: a lane may pass through at most this many cutout or null surfaces in a row
+MAX_CROSSINGS = 64
+#: a transmission counts as straight through (a null event) within this 1 - cos
+STRAIGHT_TOL = 1e-9
+ONE_MINUS_EPS = float(np.nextafter(1.0, 0.0))
+SPECULAR = int(Lobe.SPECULAR)
+SPECULAR_TRANSMISSION = int(Lobe.SPECULAR_TRANSMISSION)
+
+# lane columns: lf (float64)
+O, D, BETA, R, PREV_PDF, SEG, SHIFT = 0, 3, 6, 9, 12, 13, 14
+NF = 15
+# li (int64)
+ID, DEPTH, DELTA, FIRST, CROSS, HERO, NSTK = 0, 1, 2, 3, 4, 5, 6
+NI = 7
+# shadow records: sf (float64), si (int64)
+S_O, S_D, S_FAR, S_LEAD, S_TAIL, S_C, S_BARY = 0, 3, 6, 7, 8, 9, 12
+NSF = 15
+S_ID, S_FACE, S_NSTK, S_CROSS = 0, 1, 2, 3
+NSI = 4
+# AOV columns
+A_ALBEDO, A_NORMAL, A_DEPTH, A_UV, A_OBJECT = 0, 3, 6, 7, 9
+NA = 10
+
+#: object flags
+CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST = 1, 2, 4, 8, 16
+
+#: ``light_kind``
+AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP, SUN_AND_SKY = 0, 1, 2, 3, 4, 5, 6
+
+#: Scene tables of the kernels (float64 unless noted).
+Tables = namedtuple(
+    "Tables",
+    [
+        "packed",  # (v, 14) positions, normals, tangent_u, tangent_v, uv per vertex
+        "faces",  # (f, 3) int64
+        "face_normal",  # (f, 3) unit, on the side of the vertex normals
+        "face_object",  # (f,) int64
+        "face_offset",  # (k + 1,) int64 first triangle of each object (Embree geomID)
+        "code",  # the bsdf programs of the shading slots (render.program.ProgramTable):
+        "kids",  # slot 2k is object k's front, 2k + 1 its back
+        "frames",
+        "chat",
+        "roots",  # (2k,) root node of each slot's program, -1: black
+        "frame_lo",
+        "frame_hi",
+        "obj_flags",  # (k,) int64 CUTOUT | NULL | ENCLOSES | TWO_FACED | EMIT_CONST
+        "obj_opacity",  # (k,) constant cutout opacity
+        "obj_ior",  # (k,) constant IOR (mean over channels)
+        "obj_medium",  # (k,) int64 medium of the inside, -1: none
+        "emit_hit",  # (k, 3) radiance seen on the front of a constant diffuse emitter
+        "emit_light",  # (k, 3) radiance of its light samples
+        "area_pdf",  # (k,) light-selection probability / area
+        "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
+        "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
+        "light_kind",  # (l,) int64
+        "light_object",  # (l,) int64 object of each area light, -1 for the others
+        "light_params",  # (l, 11) position, direction, intensity, cos cutoff, cos width
+        "light_first",  # (l + 1,) int64 range of each light's triangles in light_faces
+        "light_faces",  # (t,) int64 emissive triangles
+        "light_cdf",  # (t,) area cdf within each light
+        "light_corners",  # (t, 3, 3) their corners
+        "light_pdf_area",  # (l,) 1 / area
+        "env",  # (3,) constant environment radiance
+        "env_image",  # (h, w, 3) environment map radiance
+        "env_p",  # (h * w,) its texels' probabilities
+        "env_cdf",  # (h * w,)
+        "sky",  # sun-and-sky parameters (render.sky.SunAndSky.kernel_params)
+        "sky_p",
+        "sky_cdf",
+        "scalars",  # (12,) see SC_* below
+    ],
+)
+SC_SELECT, SC_EPS, SC_MAX_DEPTH, SC_RR_DEPTH, SC_ENV, SC_ROT_C, SC_ROT_S = 0, 1, 2, 3, 4, 5, 6
+SC_MEDIA, SC_AOV, SC_CAM = 7, 8, 9  # media present, AOVs asked for, camera position (9..11)
+SC_FWD = 12  # camera forward (12..14)
+N_SCALARS = 15
+
+
+def lane_count_columns():
+    """``(NF, NI, NSF, NSI, NA)``: columns of the lane, shadow-record and AOV arrays."""
+    return NF, NI, NSF, NSI, NA
+
+
+# ---------------------------------------------------------------- small kernels
+@njit(inline="always")
+def _power(a, b):
+    a2 = a * a
+    b2 = b * b
+    s = a2 + b2
+    return a2 / s if s > 0.0 else 0.0
+
+
+@njit(inline="always")
+def _dot(ax, ay, az, bx, by, bz):
+    return ax * bx + ay * by + az * bz
+
+
+@njit
+def _fast_unit(x, y, z):
+    """(ux, uy, uz, valid); vectors shorter than 1e-150 are left as they are."""
+    length = math.sqrt(x * x + y * y + z * z)
+    if length > 1e-150:
+        return x / length, y / length, z / length, True
+    return x, y, z, False
+
+
+@njit
+def _unitize(x, y, z):
+    """A unit vector robust to under- and overflow: (ux, uy, uz, valid)."""
+    scale = max(max(abs(x), abs(y)), abs(z))
+    if not scale > 1e-300:
+        return 0.0, 0.0, 0.0, False
+    wx, wy, wz = x / scale, y / scale, z / scale
+    length = math.sqrt(wx * wx + wy * wy + wz * wz)
+    return wx / length, wy / length, wz / length, True
+
+
+@njit
+def _frame(nx, ny, nz, tx, ty, tz):
+    """The shading frame's (s, t) from a unit normal and a tangent (Gram–Schmidt; Duff
+    et al.'s frame where the tangent is missing or parallel)."""
+    c = _dot(tx, ty, tz, nx, ny, nz)
+    px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
+    sx, sy, sz, ok = _unitize(px, py, pz)
+    ok = ok and math.sqrt(px * px + py * py + pz * pz) > 1e-8 * math.sqrt(
+        tx * tx + ty * ty + tz * tz)
+    if not ok:
+        sign = 1.0 if nz >= 0.0 else -1.0
+        a = -1.0 / (sign + nz)
+        b = nx * ny * a
+        sx, sy, sz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
+    return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+
+
+@njit
+def _search_right(cdf, a, b, u):
+    """``a + searchsorted(cdf[a:b], u, side="right")``, clipped to ``b - 1``."""
+    lo, hi = a, b
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if cdf[mid] <= u:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(lo, b - 1)
+
+
+@njit
+def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
+    """A latitude-longitude map's (solid-angle pdf, radiance rgb) along ``d``."""
+    h, w = image.shape[0], image.shape[1]
+    x = rot_c * dx - rot_s * dz
+    z = rot_s * dx + rot_c * dz
+    u = 0.5 + math.atan2(x, -z) / (2.0 * np.pi)
+    v = math.acos(min(max(dy, -1.0), 1.0)) / np.pi
+    i = min(max(int(u * w), 0), w - 1)
+    j = min(max(int(v * h), 0), h - 1)
+    sin_t = math.sin(np.pi * v)
+    pdf = p[j * w + i] * h * w / (2.0 * np.pi * np.pi * sin_t) if sin_t > 1e-12 else 0.0
+    return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
+
+
+@njit
+def _environment(tb, dx, dy, dz):
+    """Radiance along an escaping direction and the pdf of sampling it (selection
+    included): (pdf, r, g, b)."""
+    sc = tb.scalars
+    kind = sc[SC_ENV]
+    select = sc[SC_SELECT]
+    if kind == ENVIRONMENT:
+        return 0.25 / np.pi * select, tb.env[0], tb.env[1], tb.env[2]
+    if kind == ENVIRONMENT_MAP:
+        pe, e0, e1, e2 = _environment_map(tb.env_image, tb.env_p, sc[SC_ROT_C], sc[SC_ROT_S],
+                                          dx, dy, dz)
+        return pe * select, e0, e1, e2
+    if kind == SUN_AND_SKY:
+        e0, e1, e2 = sun_and_sky_eval(tb.sky, dx, dy, dz)
+        return sun_and_sky_pdf(tb.sky, tb.sky_p, dx, dy, dz) * select, e0, e1, e2
+    return 0.0, 0.0, 0.0, 0.0
+
+
+@njit
+def _sample_light(tb, j, px, py, pz, u1, u2):
+    """Light ``j`` sampled from p: (wi xyz, distance, radiance rgb, pdf, delta, face,
+    b0, b1, b2).  ``pdf`` includes the selection probability (delta lights: it alone);
+    ``face >= 0`` marks an area light whose radiance varies over it (radiance returned
+    as 1: the integrator evaluates it at ``face`` and the barycentrics ``b``)."""
+    select = tb.scalars[SC_SELECT]
+    kind = tb.light_kind[j]
+    if kind == ENVIRONMENT:  # uniform sphere
+        z = 1.0 - 2.0 * u1
+        r = 2.0 * math.sqrt(max(u1 * (1.0 - u1), 0.0))
+        phi = 2.0 * np.pi * u2
+        e = tb.env
+        return (r * math.cos(phi), r * math.sin(phi), z, INFINITE_DISTANCE, e[0], e[1], e[2],
+                0.25 / np.pi * select, False, -1, 0.0, 0.0, 0.0)
+    if kind == ENVIRONMENT_MAP:  # a texel by its cdf
+        image, cdf = tb.env_image, tb.env_cdf
+        rot_c, rot_s = tb.scalars[SC_ROT_C], tb.scalars[SC_ROT_S]
+        h, w = image.shape[0], image.shape[1]
+        k = _search_right(cdf, 0, len(cdf), u1)
+        lo = cdf[k - 1] if k > 0 else 0.0
+        pk = tb.env_p[k]
+        du = min(max((u1 - lo) / pk if pk > 0 else 0.5, 0.0), 1.0)
+        row, col = k // w, k % w
+        phi = ((col + du) / w - 0.5) * 2.0 * np.pi
+        theta = (row + u2) / h * np.pi
+        st = math.sin(theta)
+        x, z = st * math.sin(phi), -st * math.cos(phi)
+        wx, wy, wz = rot_c * x + rot_s * z, math.cos(theta), -rot_s * x + rot_c * z
+        pdf, e0, e1, e2 = _environment_map(image, tb.env_p, rot_c, rot_s, wx, wy, wz)
+        if not pdf > 0.0:
+            e0 = e1 = e2 = 0.0
+        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
+    if kind == SUN_AND_SKY:
+        wx, wy, wz = sun_and_sky_sample(tb.sky, tb.sky_p, tb.sky_cdf, u1, u2)
+        pdf = sun_and_sky_pdf(tb.sky, tb.sky_p, wx, wy, wz)
+        e0 = e1 = e2 = 0.0
+        if pdf > 0.0:
+            e0, e1, e2 = sun_and_sky_eval(tb.sky, wx, wy, wz)
+        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
+    lp = tb.light_params
+    if kind == DIRECTIONAL:
+        return (-lp[j, 3], -lp[j, 4], -lp[j, 5], INFINITE_DISTANCE, lp[j, 6], lp[j, 7],
+                lp[j, 8], select, True, -1, 0.0, 0.0, 0.0)
+    if kind != AREA:  # point, or spot with a smoothstep falloff in the cosine
+        dx, dy, dz = lp[j, 0] - px, lp[j, 1] - py, lp[j, 2] - pz
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        wx, wy, wz, ok = _unitize(dx, dy, dz)
+        if not (ok and dist > 0.0):
+            return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, True, -1, 0.0, 0.0, 0.0
+        scale = 1.0 / (dist * dist)
+        if kind == SPOT:
+            c = _dot(-wx, -wy, -wz, lp[j, 3], lp[j, 4], lp[j, 5])
+            span = lp[j, 10] - lp[j, 9]
+            if span <= 0.0:
+                falloff = 1.0 if c >= lp[j, 9] else 0.0
+            else:
+                t = min(max((c - lp[j, 9]) / span, 0.0), 1.0)
+                falloff = t * t * (3.0 - 2.0 * t)
+            scale = scale * falloff
+        return (wx, wy, wz, dist, scale * lp[j, 6], scale * lp[j, 7], scale * lp[j, 8], select,
+                True, -1, 0.0, 0.0, 0.0)
+    # an emissive object: a triangle by area, a uniform point on it
+    a, b = tb.light_first[j], tb.light_first[j + 1]
+    cdf = tb.light_cdf
+    t = _search_right(cdf, a, b, u1)
+    lo = cdf[t - 1] if t > a else 0.0
+    width = cdf[t] - lo
+    u0 = min(max((u1 - lo) / width if width > 0 else 0.5, 0.0), 1.0)
+    su = math.sqrt(max(u0, 0.0))
+    b1 = 1.0 - su
+    b2 = u2 * su
+    b0 = 1.0 - b1 - b2
+    c = tb.light_corners
+    xx = b0 * c[t, 0, 0] + b1 * c[t, 1, 0] + b2 * c[t, 2, 0]
+    xy = b0 * c[t, 0, 1] + b1 * c[t, 1, 1] + b2 * c[t, 2, 1]
+    xz = b0 * c[t, 0, 2] + b1 * c[t, 1, 2] + b2 * c[t, 2, 2]
+    dx, dy, dz = xx - px, xy - py, xz - pz
+    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+    wx, wy, wz, ok = _unitize(dx, dy, dz)
+    f = tb.light_faces[t]
+    fn = tb.face_normal
+    gx, gy, gz = fn[f, 0], fn[f, 1], fn[f, 2]
+    cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
+    if not (ok and dist > 0.0 and cos_l > 1e-12):
+        return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
+    pdf = dist * dist / cos_l * tb.light_pdf_area[j] * select
+    obj = tb.light_object[j]
+    if not (tb.obj_flags[obj] & EMIT_CONST):
+        return wx, wy, wz, dist, 1.0, 1.0, 1.0, pdf, False, f, b0, b1, b2
+    if _dot(-wx, -wy, -wz, gx, gy, gz) > 0.0:  # emitters light their front side
+        e = tb.emit_light
+        return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf, False, -1, 0.0, 0.0, 0.0
+    return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False, -1, 0.0, 0.0, 0.0
+
+
+# ------------------------------------------------------- the stack of closed objects
+@njit
+def outside_ior(so, sior, nstk, objs):
+    """(n,) the IOR around object ``objs[i]`` for stack rows ``i`` (for the bindings)."""
+    out = np.ones(len(objs))
+    for i in range(len(objs)):
+        out[i] = stack_outside_ior(so, sior, i, nstk[i], objs[i])
+    return out
+
+
+@njit(inline="always")
+def _copy_row(src, i, dst, j):
+    for c in range(src.shape[1]):
+        dst[j, c] = src[i, c]
+
+
+@njit
+def _attributes(tb, f, w1, w2):
+    """Position, unit shading normal (the face's where it degenerates), unit tangent and
+    uv at barycentrics (w1, w2) of triangle ``f``."""
+    tp = tb.packed
+    v0, v1, v2 = tb.faces[f, 0], tb.faces[f, 1], tb.faces[f, 2]
+    w0 = 1.0 - w1 - w2
+    px = w0 * tp[v0, 0] + w1 * tp[v1, 0] + w2 * tp[v2, 0]
+    py = w0 * tp[v0, 1] + w1 * tp[v1, 1] + w2 * tp[v2, 1]
+    pz = w0 * tp[v0, 2] + w1 * tp[v1, 2] + w2 * tp[v2, 2]
+    nx, ny, nz, ok = _fast_unit(
+        w0 * tp[v0, 3] + w1 * tp[v1, 3] + w2 * tp[v2, 3],
+        w0 * tp[v0, 4] + w1 * tp[v1, 4] + w2 * tp[v2, 4],
+        w0 * tp[v0, 5] + w1 * tp[v1, 5] + w2 * tp[v2, 5],
+    )
+    if not ok:
+        nx, ny, nz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+    tx, ty, tz, _ = _fast_unit(
+        w0 * tp[v0, 6] + w1 * tp[v1, 6] + w2 * tp[v2, 6],
+        w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
+        w0 * tp[v0, 8] + w1 * tp[v1, 8] + w2 * tp[v2, 8],
+    )
+    u = w0 * tp[v0, 12] + w1 * tp[v1, 12] + w2 * tp[v2, 12]
+    v = w0 * tp[v0, 13] + w1 * tp[v1, 13] + w2 * tp[v2, 13]
+    return px, py, pz, nx, ny, nz, tx, ty, tz, u, v
+
+
+# -------------------------------------------------------------------- stage 1
+@njit
+def intersect(scene, tb, lf, n, face, b1, b2, t):
+    """First hits of lanes ``0 .. n-1`` (origins ``lf[:, O]``, directions ``lf[:, D]``):
+    global triangle (-1: none), barycentrics and distance."""
+    scratch = embree.new_scratch()
+    off = tb.face_offset
+    for i in range(n):
+        h = embree.intersect1(scene, lf[i, O], lf[i, O + 1], lf[i, O + 2], lf[i, D],
+                              lf[i, D + 1], lf[i, D + 2], 0.0, np.inf, scratch)
+        if h[4] == embree.MISS:
+            face[i] = -1
+        else:
+            face[i] = off[h[4]] + h[3]
+            b1[i], b2[i], t[i] = h[1], h[2], h[0]
+
+
+# -------------------------------------------------------------------- stage 2
+@njit
+def _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane, px, py, pz,
+                   gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2, face, bary0, bary1, bary2,
+                   offset, shift_in):
+    """Append a shadow ray from p toward the light sample; ``offset``: push the origin
+    off the surface (normal ``g``) on the light's side, else start at p (in a medium).
+    Returns the new count."""
+    eps = tb.scalars[SC_EPS]
+    qx, qy, qz = px, py, pz
+    if offset:
+        side = 1.0 if _dot(lx, ly, lz, gx, gy, gz) >= 0.0 else -1.0
+        qx, qy, qz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+    finite = ldist < INFINITE_DISTANCE
+    if finite:  # aim from the offset origin at the light point itself
+        tx, ty, tz = px + lx * ldist, py + ly * ldist, pz + lz * ldist
+        ex, ey, ez = tx - qx, ty - qy, tz - qz
+        ux, uy, uz, ok = _unitize(ex, ey, ez)
+        if not ok:
+            ux, uy, uz = lx, ly, lz
+        sdist = math.sqrt(ex * ex + ey * ey + ez * ez)
+        lead = ldist - sdist
+    else:
+        ux, uy, uz, sdist = lx, ly, lz, ldist
+        lead = shift_in
+    far = sdist * (1.0 - 1e-6) - eps if finite else sdist
+    sf[ns, S_O], sf[ns, S_O + 1], sf[ns, S_O + 2] = qx, qy, qz
+    sf[ns, S_D], sf[ns, S_D + 1], sf[ns, S_D + 2] = ux, uy, uz
+    sf[ns, S_FAR] = max(far, 0.0)
+    sf[ns, S_LEAD] = lead
+    sf[ns, S_TAIL] = sdist - far if finite else 0.0
+    sf[ns, S_C], sf[ns, S_C + 1], sf[ns, S_C + 2] = c0, c1, c2
+    sf[ns, S_BARY], sf[ns, S_BARY + 1], sf[ns, S_BARY + 2] = bary0, bary1, bary2
+    si[ns, S_ID], si[ns, S_FACE], si[ns, S_NSTK], si[ns, S_CROSS] = lane, face, nstk, 0
+    for s in range(so.shape[1]):
+        sso[ns, s] = so[i, s]
+        ssior[ns, s] = sior[i, s]
+    return ns + 1
+
+
+@njit
+def _parallel_shift(eps, gx, gy, gz, dx, dy, dz):
+    """How much shorter an offset ray is than the same ray from the surface point,
+    through a medium bounded by a parallel surface (|cos| clamped at 0.1)."""
+    return eps / max(abs(_dot(gx, gy, gz, dx, dy, dz)), 0.1)
+
+
+@njit
+def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bslot, L,
+           alpha, aov):
+    """Stage 2 for every lane: see the module docstring.
+
+    ``u`` (m, 9) uniforms per lane: free flight, cutout, light (3), bsdf or phase (3),
+    roulette.  Bindings: lane ``i`` with ``lane_row[i] = v >= 0`` runs program slot
+    ``bslot[v]`` with parameter row ``2k + v`` (k objects), and takes its shading
+    normal, tangent, opacity, IOR and emitted radiance from ``bf[v]`` (columns 0-2,
+    3-5, 6, 7, 8-10).
+
+    Returns ``(nn, lf, li, so, sior, ns, sf, si, sso, ssior)``: the lanes that go on and
+    the shadow records.
+    """
+    m = len(face)
+    S = so.shape[1]
+    sc = tb.scalars
+    select, eps = sc[SC_SELECT], sc[SC_EPS]
+    max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
+    has_media = sc[SC_MEDIA] != 0.0
+    want_aov = sc[SC_AOV] != 0.0
+    n_lights = len(tb.light_kind)
+    n_const = 2 * len(tb.obj_flags)
+    code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
+    ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
+    nlf = np.empty((m, NF))
+    nli = np.empty((m, NI), dtype=np.int64)
+    nso = np.empty((m, S), dtype=np.int64)
+    nsior = np.empty((m, S))
+    sf = np.empty((m, NSF))
+    si = np.empty((m, NSI), dtype=np.int64)
+    sso = np.empty((m, S), dtype=np.int64)
+    ssior = np.empty((m, S))
+    nn = 0
+    ns = 0
+    for i in range(m):
+        lane = li[i, ID]
+        depth = li[i, DEPTH]
+        nstk = li[i, NSTK]
+        ox, oy, oz = lf[i, O], lf[i, O + 1], lf[i, O + 2]
+        dx, dy, dz = lf[i, D], lf[i, D + 1], lf[i, D + 2]
+        b0, b1, b2 = lf[i, BETA], lf[i, BETA + 1], lf[i, BETA + 2]
+        r0, r1, r2 = lf[i, R], lf[i, R + 1], lf[i, R + 2]
+        prev_pdf = lf[i, PREV_PDF]
+        prev_delta = li[i, DELTA] != 0
+        f = face[i]
+        t_hit = ht[i] if f >= 0 else np.inf
+        # ---- the medium of the segment: attenuate, or scatter inside it
+        scattered = False
+        t_event = 0.0
+        med = -1
+        if has_media and nstk > 0:
+            med = tb.obj_medium[so[i, nstk - 1]]
+        if med >= 0:
+            length = t_hit + lf[i, SHIFT]
+            hero = li[i, HERO]
+            scattered, tt, v0, v1, v2, p0, p1, p2 = free_flight(tb.medium, med, hero, u[i, 0],
+                                                                length)
+            if scattered:
+                t_event = tt - lf[i, SHIFT]
+            ph = p0 if hero == 0 else (p1 if hero == 1 else p2)
+            if ph > 0.0:  # spectral MIS: r = p / p[hero], beta *= value / p[hero]
+                b0, b1, b2 = b0 * v0 / ph, b1 * v1 / ph, b2 * v2 / ph
+                r0, r1, r2 = r0 * p0 / ph, r1 * p1 / ph, r2 * p2 / ph
+            else:
+                b0 = b1 = b2 = 0.0
+        mis = (r0 + r1 + r2) / 3.0
+        if scattered:
+            # ---- a scattering vertex in the medium
+            px, py, pz = ox + t_event * dx, oy + t_event * dy, oz + t_event * dz
+            if not depth < max_depth:
+                continue
+            wox, woy, woz = -dx, -dy, -dz
+            j = min(int(u[i, 2] * n_lights), n_lights - 1)
+            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
+                tb, j, px, py, pz, u[i, 3], u[i, 4])
+            ph0, ph1, ph2, pp = _phase_eval_pdf(tb.phase, med, 0, 0, wox, woy, woz,
+                                                          lx, ly, lz)
+            if lpdf > 0.0:
+                w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
+                c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
+                if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                    ns = _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                                        px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
+                                        c2, lface, q0, q1, q2, False, 0.0)
+            wix, wiy, wiz, pdf, w0, w1, w2, lobe = _phase_sample(
+                tb.phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
+            if lobe == 0:
+                continue
+            b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
+            if depth >= rr_depth:
+                q = min(max(max(b0, b1), b2) / mis, 0.95)
+                if not u[i, 8] < q:
+                    continue
+                q = max(q, 1e-300)
+                b0, b1, b2 = b0 / q, b1 / q, b2 / q
+            if not (b0 > 0.0 or b1 > 0.0 or b2 > 0.0):
+                continue
+            _copy_row(lf, i, nlf, nn)
+            _copy_row(li, i, nli, nn)
+            _copy_row(so, i, nso, nn)
+            _copy_row(sior, i, nsior, nn)
+            nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = px, py, pz
+            nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = wix, wiy, wiz
+            nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
+            nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
+            nlf[nn, PREV_PDF], nlf[nn, SEG], nlf[nn, SHIFT] = pdf, 0.0, 0.0
+            nli[nn, DEPTH], nli[nn, DELTA], nli[nn, CROSS] = depth + 1, 0, 0
+            nn += 1
+            continue
+        if f < 0:
+            # ---- escaped: the environment, weighted against light sampling
+            pe, e0, e1, e2 = _environment(tb, dx, dy, dz)
+            if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+                w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
+                L[lane, 0] += b0 * e0 * w
+                L[lane, 1] += b1 * e1 * w
+                L[lane, 2] += b2 * e2 * w
+            continue
+        # ---- a surface
+        k = tb.face_object[f]
+        flags = tb.obj_flags[k]
+        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(tb, f, hb1[i], hb2[i])
+        gx, gy, gz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+        g_wo = -_dot(dx, dy, dz, gx, gy, gz)
+        front = g_wo > 0.0
+        slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
+        row = slot
+        v = lane_row[i]
+        if v >= 0:
+            nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
+            tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
+            opacity, entry_ior = bf[v, 6], bf[v, 7]
+            e0, e1, e2 = bf[v, 8], bf[v, 9], bf[v, 10]
+            slot, row = bslot[v], n_const + v
+        else:
+            opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
+            e0 = e1 = e2 = 0.0
+        dist_v = lf[i, SEG] + t_hit
+        crossings = li[i, CROSS]
+        # cutouts: pass straight through with probability 1 - opacity
+        if (flags & CUTOUT) and u[i, 1] >= opacity and crossings < MAX_CROSSINGS:
+            side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
+            _copy_row(lf, i, nlf, nn)
+            _copy_row(li, i, nli, nn)
+            _copy_row(so, i, nso, nn)
+            _copy_row(sior, i, nsior, nn)
+            nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = (
+                px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
+            nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
+            nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
+            nlf[nn, SEG] = dist_v
+            nlf[nn, SHIFT] = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
+            nli[nn, CROSS] = crossings + 1
+            nn += 1
+            continue
+        sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+        wox = -_dot(dx, dy, dz, sx, sy, sz)
+        woy = -_dot(dx, dy, dz, qx, qy, qz)
+        woz = -_dot(dx, dy, dz, nx, ny, nz)
+        # emission, weighted against light sampling
+        if flags & EMIT_CONST and front and woz > 1e-10:
+            e0, e1, e2 = tb.emit_hit[k, 0], tb.emit_hit[k, 1], tb.emit_hit[k, 2]
+        if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+            cos_l = abs(g_wo)
+            pl = tb.area_pdf[k] * dist_v * dist_v / cos_l if cos_l > 0.0 else 0.0
+            w = (1.0 if prev_delta else _power(prev_pdf, pl)) / mis
+            L[lane, 0] += b0 * e0 * w
+            L[lane, 1] += b1 * e1 * w
+            L[lane, 2] += b2 * e2 * w
+        root, f_lo, f_hi = tb.roots[slot], tb.frame_lo[slot], tb.frame_hi[slot]
+        if li[i, FIRST]:
+            alpha[lane] = 1.0
+            if want_aov:
+                if root >= 0:
+                    a0, a1, a2 = interpreter.cheap_albedo(code, kids, frames, params, chat, row,
+                                                          ws, root, f_lo, f_hi, wox, woy, woz)
+                    aov[lane, A_ALBEDO], aov[lane, A_ALBEDO + 1] = a0, a1
+                    aov[lane, A_ALBEDO + 2] = a2
+                aov[lane, A_NORMAL], aov[lane, A_NORMAL + 1] = nx, ny
+                aov[lane, A_NORMAL + 2] = nz
+                aov[lane, A_DEPTH] = _dot(px - sc[SC_CAM], py - sc[SC_CAM + 1],
+                                          pz - sc[SC_CAM + 2], sc[SC_FWD], sc[SC_FWD + 1],
+                                          sc[SC_FWD + 2])
+                aov[lane, A_UV], aov[lane, A_UV + 1] = uu, uv
+                aov[lane, A_OBJECT] = k
+        if root < 0:
+            continue
+        can_continue = depth < max_depth
+        is_null = (flags & NULL) != 0
+        if not (can_continue or is_null):
+            continue
+        encloses = (flags & ENCLOSES) != 0
+        # next-event estimation
+        if can_continue:
+            j = min(int(u[i, 2] * n_lights), n_lights - 1)
+            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
+                tb, j, px, py, pz, u[i, 3], u[i, 4])
+            wlx = _dot(lx, ly, lz, sx, sy, sz)
+            wly = _dot(lx, ly, lz, qx, qy, qz)
+            wlz = _dot(lx, ly, lz, nx, ny, nz)
+            g_wi = _dot(lx, ly, lz, gx, gy, gz)
+            if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
+                f0, f1, f2, pb = interpreter.eval_pdf(code, kids, frames, params, chat, row, ws,
+                                                      root, f_lo, f_hi, wox, woy, woz, wlx, wly,
+                                                      wlz)
+                w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf / mis
+                c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
+                if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                    shift = _parallel_shift(eps, gx, gy, gz, lx, ly, lz)
+                    ns = _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                                        px, py, pz, gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2,
+                                        lface, q0, q1, q2, True, shift)
+                    if encloses and g_wi * g_wo < 0.0:  # the light is across the surface
+                        sn = si[ns - 1, S_NSTK]
+                        if front:
+                            sn = stack_push(sso, ssior, ns - 1, sn, k, entry_ior)
+                        else:
+                            sn = stack_pop(sso, ssior, ns - 1, sn, k)
+                        si[ns - 1, S_NSTK] = sn
+        # the bsdf's sample continues the path
+        wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
+            code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
+            u[i, 5], u[i, 6], u[i, 7])
+        if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
+            continue
+        nx2 = wix * sx + wiy * qx + wiz * nx
+        ny2 = wix * sy + wiy * qy + wiz * ny
+        nz2 = wix * sz + wiy * qz + wiz * nz
+        g_new = _dot(nx2, ny2, nz2, gx, gy, gz)
+        if g_new == 0.0 or (g_new * g_wo > 0.0) != (wiz * woz > 0.0):
+            continue
+        straight = (is_null and lobe == SPECULAR_TRANSMISSION
+                    and _dot(nx2, ny2, nz2, dx, dy, dz) > 1.0 - STRAIGHT_TOL
+                    and crossings < MAX_CROSSINGS)
+        if not (can_continue or straight):
+            continue
+        b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
+        if not straight and depth >= rr_depth:
+            q = min(max(max(b0, b1), b2) / mis, 0.95)
+            if not u[i, 8] < q:
+                continue
+            q = max(q, 1e-300)
+            b0, b1, b2 = b0 / q, b1 / q, b2 / q
+        if straight:
+            nx2, ny2, nz2 = dx, dy, dz
+        _copy_row(lf, i, nlf, nn)
+        _copy_row(li, i, nli, nn)
+        _copy_row(so, i, nso, nn)
+        _copy_row(sior, i, nsior, nn)
+        # a transmission through a closed object enters or leaves it
+        if encloses and g_new * g_wo < 0.0:
+            if front:
+                nli[nn, NSTK] = stack_push(nso, nsior, nn, nstk, k, entry_ior)
+            else:
+                nli[nn, NSTK] = stack_pop(nso, nsior, nn, nstk, k)
+        side = 1.0 if g_new >= 0.0 else -1.0
+        nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = (
+            px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
+        nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = nx2, ny2, nz2
+        nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
+        nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
+        nlf[nn, SHIFT] = _parallel_shift(eps, gx, gy, gz, nx2, ny2, nz2)
+        nli[nn, FIRST] = 0
+        if straight:
+            nlf[nn, SEG] = dist_v
+            nli[nn, CROSS] = crossings + 1
+        else:
+            nlf[nn, PREV_PDF], nlf[nn, SEG] = pdf, 0.0
+            nli[nn, DEPTH], nli[nn, CROSS] = depth + 1, 0
+            nli[nn, DELTA] = 1 if (lobe & SPECULAR) != 0 else 0
+        nn += 1
+    return nn, nlf, nli, nso, nsior, ns, sf, si, sso, ssior
+
+
+# -------------------------------------------------------------------- stage 3
+@njit
+def shadow_trace(scene, tb, sf, n, any_pass, face, b1, b2, t):
+    """The shadow records' segments: with ``any_pass`` (the scene has cutout or null
+    surfaces) their first hits as :func:`intersect` gives them, else only whether they
+    are blocked (``face`` -2) or free (-1)."""
+    scratch = embree.new_scratch()
+    off = tb.face_offset
+    for i in range(n):
+        ox, oy, oz = sf[i, S_O], sf[i, S_O + 1], sf[i, S_O + 2]
+        dx, dy, dz = sf[i, S_D], sf[i, S_D + 1], sf[i, S_D + 2]
+        far = sf[i, S_FAR]
+        if any_pass:
+            h = embree.intersect1(scene, ox, oy, oz, dx, dy, dz, 0.0, far, scratch)
+            if h[4] == embree.MISS:
+                face[i] = -1
+            else:
+                face[i] = off[h[4]] + h[3]
+                b1[i], b2[i], t[i] = h[1], h[2], h[0]
+        else:
+            face[i] = -2 if embree.occluded1(scene, ox, oy, oz, dx, dy, dz, 0.0, far,
+                                             scratch) else -1
+
+
+@njit
+def shadow_resolve(tb, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, params, bf, bslot,
+                   L):
+    """Attenuate each shadow segment by its medium; add what reaches the light to ``L``,
+    drop what is blocked, and move records that cross a cutout or a null surface to
+    their next segment (entering or leaving the object).  Bindings as in
+    :func:`bounce` (for the cutout and null surfaces hit).  Returns ``(n, sf, si, sso,
+    ssior)``: the records still on their way."""
+    m = len(face)
+    S = sso.shape[1]
+    sc = tb.scalars
+    eps = sc[SC_EPS]
+    has_media = sc[SC_MEDIA] != 0.0
+    n_const = 2 * len(tb.obj_flags)
+    code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
+    ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
+    nsf = np.empty((m, NSF))
+    nsi = np.empty((m, NSI), dtype=np.int64)
+    nso = np.empty((m, S), dtype=np.int64)
+    nsior = np.empty((m, S))
+    nn = 0
+    for i in range(m):
+        f = face[i]
+        if f == -2:
+            continue
+        c0, c1, c2 = sf[i, S_C], sf[i, S_C + 1], sf[i, S_C + 2]
+        nstk = si[i, S_NSTK]
+        t = ht[i] if f >= 0 else sf[i, S_FAR]
+        if has_media and nstk > 0:
+            med = tb.obj_medium[sso[i, nstk - 1]]
+            if med >= 0:
+                length = t + sf[i, S_LEAD] + (0.0 if f >= 0 else sf[i, S_TAIL])
+                c0 *= transmittance(tb.medium, med, 0, length)
+                c1 *= transmittance(tb.medium, med, 1, length)
+                c2 *= transmittance(tb.medium, med, 2, length)
+        if f < 0:
+            lane = si[i, S_ID]
+            L[lane, 0] += c0
+            L[lane, 1] += c1
+            L[lane, 2] += c2
+            continue
+        k = tb.face_object[f]
+        flags = tb.obj_flags[k]
+        if not (flags & (CUTOUT | NULL)) or si[i, S_CROSS] >= MAX_CROSSINGS:
+            continue
+        dx, dy, dz = sf[i, S_D], sf[i, S_D + 1], sf[i, S_D + 2]
+        gx, gy, gz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+        front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
+        v = lane_row[i]
+        slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
+        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(tb, f, hb1[i], hb2[i])
+        row = slot
+        if v >= 0:
+            nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
+            tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
+            opacity, entry_ior = bf[v, 6], bf[v, 7]
+            slot, row = bslot[v], n_const + v
+        else:
+            opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
+        crossing = False
+        if (flags & CUTOUT) and u[i] >= opacity:
+            pass  # cut: passes unchanged
+        elif flags & NULL and tb.roots[slot] >= 0:
+            root = tb.roots[slot]
+            sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+            wox = -_dot(dx, dy, dz, sx, sy, sz)
+            woy = -_dot(dx, dy, dz, qx, qy, qz)
+            woz = -_dot(dx, dy, dz, nx, ny, nz)
+            wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
+                code, kids, frames, params, chat, row, ws, root, tb.frame_lo[slot],
+                tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
+            wx = wix * sx + wiy * qx + wiz * nx
+            wy = wix * sy + wiy * qy + wiz * ny
+            wz = wix * sz + wiy * qz + wiz * nz
+            if not (lobe == SPECULAR_TRANSMISSION and _dot(wx, wy, wz, dx, dy, dz)
+                    > 1.0 - STRAIGHT_TOL):
+                continue
+            c0, c1, c2 = c0 * pdf * w0, c1 * pdf * w1, c2 * pdf * w2
+            crossing = True
+        else:
+            continue
+        if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
+            continue
+        _copy_row(sf, i, nsf, nn)
+        _copy_row(si, i, nsi, nn)
+        _copy_row(sso, i, nso, nn)
+        _copy_row(ssior, i, nsior, nn)
+        if crossing and (flags & ENCLOSES):
+            if front:
+                nsi[nn, S_NSTK] = stack_push(nso, nsior, nn, nstk, k, entry_ior)
+            else:
+                nsi[nn, S_NSTK] = stack_pop(nso, nsior, nn, nstk, k)
+        side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
+        nsf[nn, S_O], nsf[nn, S_O + 1], nsf[nn, S_O + 2] = (
+            px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
+        cos = abs(_dot(gx, gy, gz, dx, dy, dz))
+        nsf[nn, S_FAR] = max(sf[i, S_FAR] - t - eps * cos, 0.0)
+        nsf[nn, S_LEAD] = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
+        nsf[nn, S_C], nsf[nn, S_C + 1], nsf[nn, S_C + 2] = c0, c1, c2
+        nsi[nn, S_CROSS] = si[i, S_CROSS] + 1
+        nn += 1
+    return nn, nsf, nsi, nso, nsior
