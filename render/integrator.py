@@ -598,21 +598,25 @@ class Integrator:
         alpha = np.zeros(n)
         aov = np.zeros((n if self.aovs else 1, kern.NA))
         aov[:, kern.A_OBJECT] = -1
+        # buffers reused from segment to segment (fresh ones would cost page faults):
+        # lane state in and out, shadow records in and out, hits and random numbers
+        nxt = (np.empty_like(lf), np.empty_like(li), np.empty_like(so), np.empty_like(sior))
+        shadow = self._shadow_buffers(n)
+        face = np.empty(n, dtype=np.int64)
+        b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
+        u = np.empty((n, 9))
         while n:
-            face = np.empty(n, dtype=np.int64)
-            b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
             t0 = _time.perf_counter()
             kern.intersect(self.scene_handle, self.tables, lf, n, face, b1, b2, t)
             self.embree_time += _time.perf_counter() - t0
             self.rays += n
-            u = rng.random((n, 9))
+            rng.random(out=u[:n])
             tables, params, lane_row, bf, bslot = self._bind(
-                face, b1, b2, lf[:, kern.D:kern.D + 3], so, sior, li[:, kern.NSTK])
-            n, lf, li, so, sior, ns, sf, si, sso, ssior = kern.bounce(
-                tables, face, b1, b2, t, lf, li, so, sior, u, lane_row, params, bf, bslot,
-                L, alpha, aov)
-            self._shadows(ns, sf, si, sso, ssior, rng, L)
-            lf, li, so, sior = lf[:n], li[:n], so[:n], sior[:n]
+                face[:n], b1[:n], b2[:n], lf[:n, kern.D:kern.D + 3], so, sior, li[:n, kern.NSTK])
+            n, ns = kern.bounce(tables, n, face, b1, b2, t, lf, li, so, sior, u, lane_row, params,
+                                bf, bslot, L, alpha, aov, *nxt, *shadow[0])
+            self._shadows(ns, shadow, rng, L)
+            (lf, li, so, sior), nxt = nxt, (lf, li, so, sior)
         aovs = {}
         if self.aovs:
             a = {"albedo": aov[:, 0:3], "normal": aov[:, 3:6], "depth": aov[:, 6],
@@ -620,10 +624,17 @@ class Integrator:
             aovs = {name: np.ascontiguousarray(a[name]) for name in self.aovs}
         return L, alpha, aovs
 
-    def _shadows(self, ns, sf, si, sso, ssior, rng, L):
-        """Trace shadow records to their lights (through cutouts and null surfaces)."""
-        sf, si, sso, ssior = sf[:ns], si[:ns], sso[:ns], ssior[:ns]
-        deferred = np.flatnonzero(si[:, kern.S_FACE] >= 0)
+    def _shadow_buffers(self, n: int):
+        """Two sets of shadow-record arrays for ``n`` records (read one, write the other)."""
+        return [(np.empty((n, kern.NSF)), np.empty((n, kern.NSI), dtype=np.int64),
+                 np.empty((n, self.nesting), dtype=np.int64), np.empty((n, self.nesting)))
+                for _ in range(2)]
+
+    def _shadows(self, ns, buffers, rng, L):
+        """Trace the ``ns`` shadow records in ``buffers[0]`` to their lights (through
+        cutouts and null surfaces), adding what arrives to ``L``."""
+        sf, si = buffers[0][0], buffers[0][1]
+        deferred = np.flatnonzero(si[:ns, kern.S_FACE] >= 0)
         if len(deferred):  # area lights whose radiance varies: evaluate it now
             f = si[deferred, kern.S_FACE]
             objs = self.geo.face_object[f]
@@ -634,24 +645,25 @@ class Integrator:
                     -sf[sel, kern.S_D:kern.S_D + 3])
                 sf[sel, kern.S_C:kern.S_C + 3] *= le
         any_pass = bool(self.passable.any())
+        cur, nxt = buffers
+        face = np.empty(ns, dtype=np.int64)
+        b1, b2, t = np.zeros(ns), np.zeros(ns), np.zeros(ns)
+        none = np.full(ns, -1, dtype=np.int64), np.zeros((1, 11)), np.zeros(1, np.int64)
         while ns:
-            face = np.empty(ns, dtype=np.int64)
-            b1, b2, t = np.zeros(ns), np.zeros(ns), np.zeros(ns)
             t0 = _time.perf_counter()
-            kern.shadow_trace(self.scene_handle, self.tables, sf, ns, any_pass, face, b1, b2, t)
+            kern.shadow_trace(self.scene_handle, self.tables, cur[0], ns, any_pass, face, b1, b2, t)
             self.embree_time += _time.perf_counter() - t0
             self.rays += ns
-            u = rng.random(ns) if any_pass else np.zeros(ns)
-            tables, params, lane_row, bf, bslot = self.tables, self.params, None, None, None
+            tables, params, (lane_row, bf, bslot) = self.tables, self.params, none
+            u = t  # not read: no cutouts
             if any_pass:
+                u = rng.random(ns)
                 tables, params, lane_row, bf, bslot = self._bind(
-                    face, b1, b2, sf[:, kern.S_D:kern.S_D + 3], sso, ssior, si[:, kern.S_NSTK],
-                    only=self.passable)
-            else:
-                lane_row, bf, bslot = np.full(ns, -1, np.int64), np.zeros((1, 11)), np.zeros(1, np.int64)
-            ns, sf, si, sso, ssior = kern.shadow_resolve(
-                tables, sf, si, sso, ssior, face, b1, b2, t, u, lane_row, params, bf, bslot, L)
-            sf, si, sso, ssior = sf[:ns], si[:ns], sso[:ns], ssior[:ns]
+                    face[:ns], b1[:ns], b2[:ns], cur[0][:ns, kern.S_D:kern.S_D + 3], cur[2],
+                    cur[3], cur[1][:ns, kern.S_NSTK], only=self.passable)
+            ns = kern.shadow_resolve(tables, ns, *cur, face, b1, b2, t, u, lane_row, params, bf,
+                                     bslot, L, *nxt)
+            cur, nxt = nxt, cur
 
     @property
     def scene_handle(self) -> int:

@@ -227,7 +227,7 @@ def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
     return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
 
 
-@njit
+@njit(inline="always")
 def _environment(tb, dx, dy, dz):
     """Radiance along an escaping direction and the pdf of sampling it (selection
     included): (pdf, r, g, b)."""
@@ -246,28 +246,34 @@ def _environment(tb, dx, dy, dz):
     return 0.0, 0.0, 0.0, 0.0
 
 
-@njit
-def _sample_light(tb, j, px, py, pz, u1, u2):
+@njit(inline="always")
+def _sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                  light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
+                  env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
+                  u2):
     """Light ``j`` sampled from p: (wi xyz, distance, radiance rgb, pdf, delta, face,
     b0, b1, b2).  ``pdf`` includes the selection probability (delta lights: it alone);
     ``face >= 0`` marks an area light whose radiance varies over it (radiance returned
-    as 1: the integrator evaluates it at ``face`` and the barycentrics ``b``)."""
-    select = tb.scalars[SC_SELECT]
-    kind = tb.light_kind[j]
+    as 1: the integrator evaluates it at ``face`` and the barycentrics ``b``).
+
+    Takes the scene's arrays one by one (:data:`Tables`): an array taken out of a tuple
+    costs numba two atomic reference counts, which per lane cost more than the work."""
+    select = scalars[SC_SELECT]
+    kind = light_kind[j]
     if kind == ENVIRONMENT:  # uniform sphere
         z = 1.0 - 2.0 * u1
         r = 2.0 * math.sqrt(max(u1 * (1.0 - u1), 0.0))
         phi = 2.0 * np.pi * u2
-        e = tb.env
+        e = env
         return (r * math.cos(phi), r * math.sin(phi), z, INFINITE_DISTANCE, e[0], e[1], e[2],
                 0.25 / np.pi * select, False, -1, 0.0, 0.0, 0.0)
     if kind == ENVIRONMENT_MAP:  # a texel by its cdf
-        image, cdf = tb.env_image, tb.env_cdf
-        rot_c, rot_s = tb.scalars[SC_ROT_C], tb.scalars[SC_ROT_S]
+        image, cdf = env_image, env_cdf
+        rot_c, rot_s = scalars[SC_ROT_C], scalars[SC_ROT_S]
         h, w = image.shape[0], image.shape[1]
         k = _search_right(cdf, 0, len(cdf), u1)
         lo = cdf[k - 1] if k > 0 else 0.0
-        pk = tb.env_p[k]
+        pk = env_p[k]
         du = min(max((u1 - lo) / pk if pk > 0 else 0.5, 0.0), 1.0)
         row, col = k // w, k % w
         phi = ((col + du) / w - 0.5) * 2.0 * np.pi
@@ -275,18 +281,18 @@ def _sample_light(tb, j, px, py, pz, u1, u2):
         st = math.sin(theta)
         x, z = st * math.sin(phi), -st * math.cos(phi)
         wx, wy, wz = rot_c * x + rot_s * z, math.cos(theta), -rot_s * x + rot_c * z
-        pdf, e0, e1, e2 = _environment_map(image, tb.env_p, rot_c, rot_s, wx, wy, wz)
+        pdf, e0, e1, e2 = _environment_map(image, env_p, rot_c, rot_s, wx, wy, wz)
         if not pdf > 0.0:
             e0 = e1 = e2 = 0.0
         return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
     if kind == SUN_AND_SKY:
-        wx, wy, wz = sun_and_sky_sample(tb.sky, tb.sky_p, tb.sky_cdf, u1, u2)
-        pdf = sun_and_sky_pdf(tb.sky, tb.sky_p, wx, wy, wz)
+        wx, wy, wz = sun_and_sky_sample(sky, sky_p, sky_cdf, u1, u2)
+        pdf = sun_and_sky_pdf(sky, sky_p, wx, wy, wz)
         e0 = e1 = e2 = 0.0
         if pdf > 0.0:
-            e0, e1, e2 = sun_and_sky_eval(tb.sky, wx, wy, wz)
+            e0, e1, e2 = sun_and_sky_eval(sky, wx, wy, wz)
         return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
-    lp = tb.light_params
+    lp = light_params
     if kind == DIRECTIONAL:
         return (-lp[j, 3], -lp[j, 4], -lp[j, 5], INFINITE_DISTANCE, lp[j, 6], lp[j, 7],
                 lp[j, 8], select, True, -1, 0.0, 0.0, 0.0)
@@ -309,8 +315,8 @@ def _sample_light(tb, j, px, py, pz, u1, u2):
         return (wx, wy, wz, dist, scale * lp[j, 6], scale * lp[j, 7], scale * lp[j, 8], select,
                 True, -1, 0.0, 0.0, 0.0)
     # an emissive object: a triangle by area, a uniform point on it
-    a, b = tb.light_first[j], tb.light_first[j + 1]
-    cdf = tb.light_cdf
+    a, b = light_first[j], light_first[j + 1]
+    cdf = light_cdf
     t = _search_right(cdf, a, b, u1)
     lo = cdf[t - 1] if t > a else 0.0
     width = cdf[t] - lo
@@ -319,25 +325,25 @@ def _sample_light(tb, j, px, py, pz, u1, u2):
     b1 = 1.0 - su
     b2 = u2 * su
     b0 = 1.0 - b1 - b2
-    c = tb.light_corners
+    c = light_corners
     xx = b0 * c[t, 0, 0] + b1 * c[t, 1, 0] + b2 * c[t, 2, 0]
     xy = b0 * c[t, 0, 1] + b1 * c[t, 1, 1] + b2 * c[t, 2, 1]
     xz = b0 * c[t, 0, 2] + b1 * c[t, 1, 2] + b2 * c[t, 2, 2]
     dx, dy, dz = xx - px, xy - py, xz - pz
     dist = math.sqrt(dx * dx + dy * dy + dz * dz)
     wx, wy, wz, ok = _unitize(dx, dy, dz)
-    f = tb.light_faces[t]
-    fn = tb.face_normal
+    f = light_faces[t]
+    fn = face_normal
     gx, gy, gz = fn[f, 0], fn[f, 1], fn[f, 2]
     cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
     if not (ok and dist > 0.0 and cos_l > 1e-12):
         return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
-    pdf = dist * dist / cos_l * tb.light_pdf_area[j] * select
-    obj = tb.light_object[j]
-    if not (tb.obj_flags[obj] & EMIT_CONST):
+    pdf = dist * dist / cos_l * light_pdf_area[j] * select
+    obj = light_object[j]
+    if not (obj_flags[obj] & EMIT_CONST):
         return wx, wy, wz, dist, 1.0, 1.0, 1.0, pdf, False, f, b0, b1, b2
     if _dot(-wx, -wy, -wz, gx, gy, gz) > 0.0:  # emitters light their front side
-        e = tb.emit_light
+        e = emit_light
         return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf, False, -1, 0.0, 0.0, 0.0
     return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False, -1, 0.0, 0.0, 0.0
 
@@ -358,12 +364,12 @@ def _copy_row(src, i, dst, j):
         dst[j, c] = src[i, c]
 
 
-@njit
-def _attributes(tb, f, w1, w2):
+@njit(inline="always")
+def _attributes(packed, faces, face_normal, f, w1, w2):
     """Position, unit shading normal (the face's where it degenerates), unit tangent and
     uv at barycentrics (w1, w2) of triangle ``f``."""
-    tp = tb.packed
-    v0, v1, v2 = tb.faces[f, 0], tb.faces[f, 1], tb.faces[f, 2]
+    tp = packed
+    v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
     w0 = 1.0 - w1 - w2
     px = w0 * tp[v0, 0] + w1 * tp[v1, 0] + w2 * tp[v2, 0]
     py = w0 * tp[v0, 1] + w1 * tp[v1, 1] + w2 * tp[v2, 1]
@@ -374,7 +380,7 @@ def _attributes(tb, f, w1, w2):
         w0 * tp[v0, 5] + w1 * tp[v1, 5] + w2 * tp[v2, 5],
     )
     if not ok:
-        nx, ny, nz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+        nx, ny, nz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
     tx, ty, tz, _ = _fast_unit(
         w0 * tp[v0, 6] + w1 * tp[v1, 6] + w2 * tp[v2, 6],
         w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
@@ -403,14 +409,13 @@ def intersect(scene, tb, lf, n, face, b1, b2, t):
 
 
 # -------------------------------------------------------------------- stage 2
-@njit
-def _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane, px, py, pz,
+@njit(inline="always")
+def _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane, px, py, pz,
                    gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2, face, bary0, bary1, bary2,
                    offset, shift_in):
     """Append a shadow ray from p toward the light sample; ``offset``: push the origin
     off the surface (normal ``g``) on the light's side, else start at p (in a medium).
     Returns the new count."""
-    eps = tb.scalars[SC_EPS]
     qx, qy, qz = px, py, pz
     if offset:
         side = 1.0 if _dot(lx, ly, lz, gx, gy, gz) >= 0.0 else -1.0
@@ -450,8 +455,8 @@ def _parallel_shift(eps, gx, gy, gz, dx, dy, dz):
 
 
 @njit
-def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bslot, L,
-           alpha, aov):
+def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bslot, L,
+           alpha, aov, nlf, nli, nso, nsior, sf, si, sso, ssior):
     """Stage 2 for every lane: see the module docstring.
 
     ``u`` (m, 9) uniforms per lane: free flight, cutout, light (3), bsdf or phase (3),
@@ -460,11 +465,11 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
     normal, tangent, opacity, IOR and emitted radiance from ``bf[v]`` (columns 0-2,
     3-5, 6, 7, 8-10).
 
-    Returns ``(nn, lf, li, so, sior, ns, sf, si, sso, ssior)``: the lanes that go on and
-    the shadow records.
+    Lanes ``0 .. m-1`` are read; the lanes that go on are written to ``nlf``, ``nli``,
+    ``nso``, ``nsior`` and the shadow records to ``sf``, ``si``, ``sso``, ``ssior`` (all
+    with at least ``m`` rows, reused from segment to segment: a fresh allocation per
+    segment costs page faults).  Returns their counts ``(nn, ns)``.
     """
-    m = len(face)
-    S = so.shape[1]
     sc = tb.scalars
     select, eps = sc[SC_SELECT], sc[SC_EPS]
     max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
@@ -473,15 +478,18 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
     n_lights = len(tb.light_kind)
     n_const = 2 * len(tb.obj_flags)
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
+    # arrays out of the tuple once: each access costs numba two atomic reference counts
+    area_pdf, emit_hit, face_normal = tb.area_pdf, tb.emit_hit, tb.face_normal
+    face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
+    medium, phase = tb.medium, tb.phase
+    obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
+    obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
+    light_kind, light_params, light_first = tb.light_kind, tb.light_params, tb.light_first
+    light_cdf, light_corners, light_faces = tb.light_cdf, tb.light_corners, tb.light_faces
+    light_pdf_area, light_object, emit_light = tb.light_pdf_area, tb.light_object, tb.emit_light
+    env, env_image, env_p, env_cdf = tb.env, tb.env_image, tb.env_p, tb.env_cdf
+    sky, sky_p, sky_cdf = tb.sky, tb.sky_p, tb.sky_cdf
     ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
-    nlf = np.empty((m, NF))
-    nli = np.empty((m, NI), dtype=np.int64)
-    nso = np.empty((m, S), dtype=np.int64)
-    nsior = np.empty((m, S))
-    sf = np.empty((m, NSF))
-    si = np.empty((m, NSI), dtype=np.int64)
-    sso = np.empty((m, S), dtype=np.int64)
-    ssior = np.empty((m, S))
     nn = 0
     ns = 0
     for i in range(m):
@@ -501,11 +509,11 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
         t_event = 0.0
         med = -1
         if has_media and nstk > 0:
-            med = tb.obj_medium[so[i, nstk - 1]]
+            med = obj_medium[so[i, nstk - 1]]
         if med >= 0:
             length = t_hit + lf[i, SHIFT]
             hero = li[i, HERO]
-            scattered, tt, v0, v1, v2, p0, p1, p2 = free_flight(tb.medium, med, hero, u[i, 0],
+            scattered, tt, v0, v1, v2, p0, p1, p2 = free_flight(medium, med, hero, u[i, 0],
                                                                 length)
             if scattered:
                 t_event = tt - lf[i, SHIFT]
@@ -524,18 +532,20 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
             wox, woy, woz = -dx, -dy, -dz
             j = min(int(u[i, 2] * n_lights), n_lights - 1)
             (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
-                tb, j, px, py, pz, u[i, 3], u[i, 4])
-            ph0, ph1, ph2, pp = _phase_eval_pdf(tb.phase, med, 0, 0, wox, woy, woz,
+                light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
+                env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
+            ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
                                                           lx, ly, lz)
             if lpdf > 0.0:
                 w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
                 c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
                 if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                    ns = _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                    ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
                                         px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
                                         c2, lface, q0, q1, q2, False, 0.0)
             wix, wiy, wiz, pdf, w0, w1, w2, lobe = _phase_sample(
-                tb.phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
+                phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
             if lobe == 0:
                 continue
             b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
@@ -569,10 +579,10 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
                 L[lane, 2] += b2 * e2 * w
             continue
         # ---- a surface
-        k = tb.face_object[f]
-        flags = tb.obj_flags[k]
-        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(tb, f, hb1[i], hb2[i])
-        gx, gy, gz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+        k = face_object[f]
+        flags = obj_flags[k]
+        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(packed, faces, face_normal, f, hb1[i], hb2[i])
+        gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
         g_wo = -_dot(dx, dy, dz, gx, gy, gz)
         front = g_wo > 0.0
         slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
@@ -585,7 +595,7 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
             e0, e1, e2 = bf[v, 8], bf[v, 9], bf[v, 10]
             slot, row = bslot[v], n_const + v
         else:
-            opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
+            opacity, entry_ior = obj_opacity[k], obj_ior[k]
             e0 = e1 = e2 = 0.0
         dist_v = lf[i, SEG] + t_hit
         crossings = li[i, CROSS]
@@ -611,15 +621,15 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
         woz = -_dot(dx, dy, dz, nx, ny, nz)
         # emission, weighted against light sampling
         if flags & EMIT_CONST and front and woz > 1e-10:
-            e0, e1, e2 = tb.emit_hit[k, 0], tb.emit_hit[k, 1], tb.emit_hit[k, 2]
+            e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
         if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
             cos_l = abs(g_wo)
-            pl = tb.area_pdf[k] * dist_v * dist_v / cos_l if cos_l > 0.0 else 0.0
+            pl = area_pdf[k] * dist_v * dist_v / cos_l if cos_l > 0.0 else 0.0
             w = (1.0 if prev_delta else _power(prev_pdf, pl)) / mis
             L[lane, 0] += b0 * e0 * w
             L[lane, 1] += b1 * e1 * w
             L[lane, 2] += b2 * e2 * w
-        root, f_lo, f_hi = tb.roots[slot], tb.frame_lo[slot], tb.frame_hi[slot]
+        root, f_lo, f_hi = roots[slot], frame_lo[slot], frame_hi[slot]
         if li[i, FIRST]:
             alpha[lane] = 1.0
             if want_aov:
@@ -646,7 +656,9 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
         if can_continue:
             j = min(int(u[i, 2] * n_lights), n_lights - 1)
             (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
-                tb, j, px, py, pz, u[i, 3], u[i, 4])
+                light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
+                env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
             wlx = _dot(lx, ly, lz, sx, sy, sz)
             wly = _dot(lx, ly, lz, qx, qy, qz)
             wlz = _dot(lx, ly, lz, nx, ny, nz)
@@ -659,7 +671,7 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
                 c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
                 if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
                     shift = _parallel_shift(eps, gx, gy, gz, lx, ly, lz)
-                    ns = _shadow_record(tb, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                    ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
                                         px, py, pz, gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2,
                                         lface, q0, q1, q2, True, shift)
                     if encloses and g_wi * g_wo < 0.0:  # the light is across the surface
@@ -721,7 +733,7 @@ def bounce(tb, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bs
             nli[nn, DEPTH], nli[nn, CROSS] = depth + 1, 0
             nli[nn, DELTA] = 1 if (lobe & SPECULAR) != 0 else 0
         nn += 1
-    return nn, nlf, nli, nso, nsior, ns, sf, si, sso, ssior
+    return nn, ns
 
 
 # -------------------------------------------------------------------- stage 3
@@ -749,25 +761,23 @@ def shadow_trace(scene, tb, sf, n, any_pass, face, b1, b2, t):
 
 
 @njit
-def shadow_resolve(tb, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, params, bf, bslot,
-                   L):
+def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, params, bf,
+                   bslot, L, nsf, nsi, nso, nsior):
     """Attenuate each shadow segment by its medium; add what reaches the light to ``L``,
     drop what is blocked, and move records that cross a cutout or a null surface to
     their next segment (entering or leaving the object).  Bindings as in
-    :func:`bounce` (for the cutout and null surfaces hit).  Returns ``(n, sf, si, sso,
-    ssior)``: the records still on their way."""
-    m = len(face)
-    S = sso.shape[1]
+    :func:`bounce` (for the cutout and null surfaces hit).  Records ``0 .. m-1`` are
+    read; those still on their way are written to ``nsf``, ``nsi``, ``nso``, ``nsior``;
+    returns their count."""
     sc = tb.scalars
     eps = sc[SC_EPS]
     has_media = sc[SC_MEDIA] != 0.0
     n_const = 2 * len(tb.obj_flags)
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
+    face_normal, face_object, roots, medium = tb.face_normal, tb.face_object, tb.roots, tb.medium
+    frame_lo, frame_hi, packed, faces = tb.frame_lo, tb.frame_hi, tb.packed, tb.faces
+    obj_flags, obj_ior, obj_medium, obj_opacity = tb.obj_flags, tb.obj_ior, tb.obj_medium, tb.obj_opacity
     ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
-    nsf = np.empty((m, NSF))
-    nsi = np.empty((m, NSI), dtype=np.int64)
-    nso = np.empty((m, S), dtype=np.int64)
-    nsior = np.empty((m, S))
     nn = 0
     for i in range(m):
         f = face[i]
@@ -777,28 +787,28 @@ def shadow_resolve(tb, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, para
         nstk = si[i, S_NSTK]
         t = ht[i] if f >= 0 else sf[i, S_FAR]
         if has_media and nstk > 0:
-            med = tb.obj_medium[sso[i, nstk - 1]]
+            med = obj_medium[sso[i, nstk - 1]]
             if med >= 0:
                 length = t + sf[i, S_LEAD] + (0.0 if f >= 0 else sf[i, S_TAIL])
-                c0 *= transmittance(tb.medium, med, 0, length)
-                c1 *= transmittance(tb.medium, med, 1, length)
-                c2 *= transmittance(tb.medium, med, 2, length)
+                c0 *= transmittance(medium, med, 0, length)
+                c1 *= transmittance(medium, med, 1, length)
+                c2 *= transmittance(medium, med, 2, length)
         if f < 0:
             lane = si[i, S_ID]
             L[lane, 0] += c0
             L[lane, 1] += c1
             L[lane, 2] += c2
             continue
-        k = tb.face_object[f]
-        flags = tb.obj_flags[k]
+        k = face_object[f]
+        flags = obj_flags[k]
         if not (flags & (CUTOUT | NULL)) or si[i, S_CROSS] >= MAX_CROSSINGS:
             continue
         dx, dy, dz = sf[i, S_D], sf[i, S_D + 1], sf[i, S_D + 2]
-        gx, gy, gz = tb.face_normal[f, 0], tb.face_normal[f, 1], tb.face_normal[f, 2]
+        gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
         front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
         v = lane_row[i]
         slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
-        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(tb, f, hb1[i], hb2[i])
+        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(packed, faces, face_normal, f, hb1[i], hb2[i])
         row = slot
         if v >= 0:
             nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
@@ -806,19 +816,19 @@ def shadow_resolve(tb, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, para
             opacity, entry_ior = bf[v, 6], bf[v, 7]
             slot, row = bslot[v], n_const + v
         else:
-            opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
+            opacity, entry_ior = obj_opacity[k], obj_ior[k]
         crossing = False
         if (flags & CUTOUT) and u[i] >= opacity:
             pass  # cut: passes unchanged
-        elif flags & NULL and tb.roots[slot] >= 0:
-            root = tb.roots[slot]
+        elif flags & NULL and roots[slot] >= 0:
+            root = roots[slot]
             sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
             wox = -_dot(dx, dy, dz, sx, sy, sz)
             woy = -_dot(dx, dy, dz, qx, qy, qz)
             woz = -_dot(dx, dy, dz, nx, ny, nz)
             wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
-                code, kids, frames, params, chat, row, ws, root, tb.frame_lo[slot],
-                tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
+                code, kids, frames, params, chat, row, ws, root, frame_lo[slot],
+                frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
             wx = wix * sx + wiy * qx + wiz * nx
             wy = wix * sy + wiy * qy + wiz * ny
             wz = wix * sz + wiy * qz + wiz * nz
@@ -849,4 +859,4 @@ def shadow_resolve(tb, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, para
         nsf[nn, S_C], nsf[nn, S_C + 1], nsf[nn, S_C + 2] = c0, c1, c2
         nsi[nn, S_CROSS] = si[i, S_CROSS] + 1
         nn += 1
-    return nn, nsf, nsi, nso, nsior
+    return nn

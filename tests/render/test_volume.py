@@ -300,18 +300,21 @@ def test_shadow_transmittance_inside_a_medium():
         scene = Scene(cam, [box], [], RenderSettings(4, 4, spp=1))
         integ = Integrator(scene, scene.build())
         assert integ.null_candidate[0] == (mode == "scatter_transmit")
-        sf = np.zeros((2, path.NSF))
+        buffers = integ._shadow_buffers(2)
+        sf, si, sso, ssior = buffers[0]
+        sf[:] = 0.0
         sf[:, path.S_D:path.S_D + 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
         sf[:, path.S_FAR] = [0.5, 1.5]
         sf[:, path.S_TAIL] = [0.25, 0.0]
         sf[:, path.S_C:path.S_C + 3] = 1.0
-        si = np.zeros((2, path.NSI), dtype=np.int64)
+        si[:] = 0
         si[:, path.S_ID] = [0, 1]
         si[:, path.S_FACE] = -1
         si[:, path.S_NSTK] = 1
-        sso = np.zeros((2, integ.nesting), dtype=np.int64)  # inside object 0
+        sso[:] = 0  # inside object 0
+        ssior[:] = 1.0
         L = np.zeros((2, 3))
-        integ._shadows(2, sf, si, sso, np.ones((2, integ.nesting)), np.random.default_rng(0), L)
+        integ._shadows(2, buffers, np.random.default_rng(0), L)
         assert np.allclose(L, np.exp(-np.outer([0.75, 1.5], sigma)), rtol=1e-9)
 
 
