@@ -228,7 +228,7 @@ class Integrator:
         self.max_depth = self.settings.max_depth if self.settings.max_depth > 0 else 1 << 30
         # interfaces and media: closed non-thin-walled objects enter the medium stack
         self.encloses = np.array([_may_enclose(m) and _surface_is_closed(o.surface)
-                                  for m, o in zip(mats, self.objects)], dtype=bool)
+                                  for m, o in zip(mats, self.objects, strict=True)], dtype=bool)
         self.media = []
         obj_medium = np.full(n_obj, -1, dtype=np.int64)
         for k, mat in enumerate(mats):
@@ -581,7 +581,7 @@ class Integrator:
         n = len(pixel)
         o, d = primary_rays(self.camera, pixel, rng.random((n, 2)))
         lf = np.zeros((n, kern.NF))
-        lf[:, kern.O:kern.O + 3] = o
+        lf[:, kern.ORG:kern.ORG + 3] = o
         lf[:, kern.D:kern.D + 3] = d
         lf[:, kern.BETA:kern.BETA + 3] = 1.0
         lf[:, kern.R:kern.R + 3] = 1.0
@@ -756,7 +756,7 @@ class Integrator:
             embree_time_s=self.embree_time,
             samples_per_s=npix * done / elapsed if elapsed > 0 else 0.0,
             triangles=self.geo.triangle_count,
-            bound_objects=[o.name for o, b in zip(self.objects, self.bound) if b],
+            bound_objects=[o.name for o, b in zip(self.objects, self.bound, strict=True) if b],
         )
         return film
 

@@ -43,6 +43,7 @@ from render.bsdf import Lobe
 from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
 from render.df.anisotropic_vdf import sample as _phase_sample
 from render.jit import njit
+from render.lights import INFINITE_DISTANCE
 from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
 from render.volume import (
     free_flight,
@@ -59,12 +60,13 @@ __all__ = [
     "shadow_trace",
     "shadow_resolve",
     "outside_ior",
+    "sample_light",
+    "sample_lights",
+    "escaped",
     "lane_count_columns",
 ]
 
 INV_PI = 1.0 / np.pi
-#: distance of a light at infinity (render.lights.INFINITE_DISTANCE)
-INFINITE_DISTANCE = 1e30
 #: a lane may pass through at most this many cutout or null surfaces in a row
 MAX_CROSSINGS = 64
 #: a transmission counts as straight through (a null event) within this 1 - cos
@@ -74,7 +76,7 @@ SPECULAR = int(Lobe.SPECULAR)
 SPECULAR_TRANSMISSION = int(Lobe.SPECULAR_TRANSMISSION)
 
 # lane columns: lf (float64)
-O, D, BETA, R, PREV_PDF, SEG, SHIFT = 0, 3, 6, 9, 12, 13, 14
+ORG, D, BETA, R, PREV_PDF, SEG, SHIFT = 0, 3, 6, 9, 12, 13, 14
 NF = 15
 # li (int64)
 ID, DEPTH, DELTA, FIRST, CROSS, HERO, NSTK = 0, 1, 2, 3, 4, 5, 6
@@ -247,7 +249,7 @@ def _environment(tb, dx, dy, dz):
 
 
 @njit(inline="always")
-def _sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+def sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                   light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
                   env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
                   u2):
@@ -259,6 +261,8 @@ def _sample_light(light_kind, light_params, light_first, light_cdf, light_corner
     Takes the scene's arrays one by one (:data:`Tables`): an array taken out of a tuple
     costs numba two atomic reference counts, which per lane cost more than the work."""
     select = scalars[SC_SELECT]
+    if j < 0:  # a scene without lights
+        return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
     kind = light_kind[j]
     if kind == ENVIRONMENT:  # uniform sphere
         z = 1.0 - 2.0 * u1
@@ -348,6 +352,40 @@ def _sample_light(light_kind, light_params, light_first, light_cdf, light_corner
     return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False, -1, 0.0, 0.0, 0.0
 
 
+@njit
+def sample_lights(tb, p, u):
+    """:func:`sample_light` for points ``p`` (n, 3) with uniforms ``u`` (n, 3): the
+    light chosen by ``u[:, 0]`` as :func:`bounce` chooses it, sampled with ``u[:, 1:]``.
+
+    Returns ``wi`` (n, 3), distance (n,), radiance (n, 3), pdf (n,) (selection
+    included), delta (n,) bool and the varying-emission face (n,) (-1: none)."""
+    n = len(p)
+    wi, dist, li, pdf = np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n)
+    delta, face = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.int64)
+    n_lights = len(tb.light_kind)
+    for i in range(n):
+        j = min(int(u[i, 0] * n_lights), n_lights - 1)
+        (wi[i, 0], wi[i, 1], wi[i, 2], dist[i], li[i, 0], li[i, 1], li[i, 2], pdf[i], delta[i],
+         face[i], _, _, _) = sample_light(
+            tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
+            tb.light_faces, tb.light_pdf_area, tb.light_object, tb.obj_flags, tb.emit_light,
+            tb.face_normal, tb.env, tb.env_image, tb.env_p, tb.env_cdf, tb.sky, tb.sky_p,
+            tb.sky_cdf, tb.scalars, j, p[i, 0], p[i, 1], p[i, 2], u[i, 1], u[i, 2])
+    return wi, dist, li, pdf, delta, face
+
+
+@njit
+def escaped(tb, d):
+    """What a path sees along unit directions ``d`` (n, 3) that leave the scene: the
+    pdf with which light sampling picks them (selection included) (n,) and the
+    radiance (n, 3)."""
+    n = len(d)
+    pdf, li = np.empty(n), np.empty((n, 3))
+    for i in range(n):
+        pdf[i], li[i, 0], li[i, 1], li[i, 2] = _environment(tb, d[i, 0], d[i, 1], d[i, 2])
+    return pdf, li
+
+
 # ------------------------------------------------------- the stack of closed objects
 @njit
 def outside_ior(so, sior, nstk, objs):
@@ -394,12 +432,12 @@ def _attributes(packed, faces, face_normal, f, w1, w2):
 # -------------------------------------------------------------------- stage 1
 @njit
 def intersect(scene, tb, lf, n, face, b1, b2, t):
-    """First hits of lanes ``0 .. n-1`` (origins ``lf[:, O]``, directions ``lf[:, D]``):
+    """First hits of lanes ``0 .. n-1`` (origins ``lf[:, ORG]``, directions ``lf[:, D]``):
     global triangle (-1: none), barycentrics and distance."""
     scratch = embree.new_scratch()
     off = tb.face_offset
     for i in range(n):
-        h = embree.intersect1(scene, lf[i, O], lf[i, O + 1], lf[i, O + 2], lf[i, D],
+        h = embree.intersect1(scene, lf[i, ORG], lf[i, ORG + 1], lf[i, ORG + 2], lf[i, D],
                               lf[i, D + 1], lf[i, D + 2], 0.0, np.inf, scratch)
         if h[4] == embree.MISS:
             face[i] = -1
@@ -471,7 +509,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     segment costs page faults).  Returns their counts ``(nn, ns)``.
     """
     sc = tb.scalars
-    select, eps = sc[SC_SELECT], sc[SC_EPS]
+    eps = sc[SC_EPS]
     max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
     has_media = sc[SC_MEDIA] != 0.0
     want_aov = sc[SC_AOV] != 0.0
@@ -496,7 +534,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         lane = li[i, ID]
         depth = li[i, DEPTH]
         nstk = li[i, NSTK]
-        ox, oy, oz = lf[i, O], lf[i, O + 1], lf[i, O + 2]
+        ox, oy, oz = lf[i, ORG], lf[i, ORG + 1], lf[i, ORG + 2]
         dx, dy, dz = lf[i, D], lf[i, D + 1], lf[i, D + 2]
         b0, b1, b2 = lf[i, BETA], lf[i, BETA + 1], lf[i, BETA + 2]
         r0, r1, r2 = lf[i, R], lf[i, R + 1], lf[i, R + 2]
@@ -530,8 +568,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             if not depth < max_depth:
                 continue
             wox, woy, woz = -dx, -dy, -dz
-            j = min(int(u[i, 2] * n_lights), n_lights - 1)
-            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
+            j = min(int(u[i, 2] * n_lights), n_lights - 1)  # -1: no lights (pdf 0 below)
+            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
                 light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                 light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
                 env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
@@ -561,7 +599,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             _copy_row(li, i, nli, nn)
             _copy_row(so, i, nso, nn)
             _copy_row(sior, i, nsior, nn)
-            nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = px, py, pz
+            nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = px, py, pz
             nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = wix, wiy, wiz
             nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
             nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
@@ -581,7 +619,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # ---- a surface
         k = face_object[f]
         flags = obj_flags[k]
-        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(packed, faces, face_normal, f, hb1[i], hb2[i])
+        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(
+            packed, faces, face_normal, f, hb1[i], hb2[i])
         gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
         g_wo = -_dot(dx, dy, dz, gx, gy, gz)
         front = g_wo > 0.0
@@ -606,7 +645,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             _copy_row(li, i, nli, nn)
             _copy_row(so, i, nso, nn)
             _copy_row(sior, i, nsior, nn)
-            nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = (
+            nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = (
                 px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
             nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
             nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
@@ -655,7 +694,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # next-event estimation
         if can_continue:
             j = min(int(u[i, 2] * n_lights), n_lights - 1)
-            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = _sample_light(
+            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
                 light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                 light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
                 env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
@@ -718,7 +757,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             else:
                 nli[nn, NSTK] = stack_pop(nso, nsior, nn, nstk, k)
         side = 1.0 if g_new >= 0.0 else -1.0
-        nlf[nn, O], nlf[nn, O + 1], nlf[nn, O + 2] = (
+        nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = (
             px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
         nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = nx2, ny2, nz2
         nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
@@ -776,7 +815,8 @@ def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, p
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     face_normal, face_object, roots, medium = tb.face_normal, tb.face_object, tb.roots, tb.medium
     frame_lo, frame_hi, packed, faces = tb.frame_lo, tb.frame_hi, tb.packed, tb.faces
-    obj_flags, obj_ior, obj_medium, obj_opacity = tb.obj_flags, tb.obj_ior, tb.obj_medium, tb.obj_opacity
+    obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
+    obj_opacity = tb.obj_opacity
     ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
     nn = 0
     for i in range(m):
@@ -808,7 +848,8 @@ def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, p
         front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
         v = lane_row[i]
         slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
-        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(packed, faces, face_normal, f, hb1[i], hb2[i])
+        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(
+            packed, faces, face_normal, f, hb1[i], hb2[i])
         row = slot
         if v >= 0:
             nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]

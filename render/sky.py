@@ -40,7 +40,7 @@ Sampling (next-event estimation): the sun's cone, uniformly, with probability
 shine), else a piecewise-constant table of the sky and ground over cells of equal
 solid angle (uniform in ``cos theta`` and ``phi``, 128 x 256), proportional to each
 cell's mean luminance plus 1 % of the average (so every direction has a positive
-density).  :meth:`SunAndSky.pdf` is exactly the density of :meth:`SunAndSky.sample_li`,
+density).  :meth:`SunAndSky.pdf` is exactly the density of :meth:`SunAndSky.sample_direction`,
 and :meth:`SunAndSky.eval` the analytic radiance, so estimates are unbiased whatever
 the table's resolution.
 
@@ -49,14 +49,14 @@ path tracer's bounce kernel calls: :func:`sun_and_sky_eval` (radiance),
 :func:`sun_and_sky_pdf` and :func:`sun_and_sky_sample`, on the constants of
 :meth:`SunAndSky.kernel_params` (everything fixed per sky, the Perez coefficients and
 zenith values included) and the table ``SunAndSky._p``, ``._cdf``.  The numpy methods
-(:meth:`SunAndSky.eval`, ``sky``, ``sun``, ``pdf``, ``sample_direction``, ``sample_li``)
+(:meth:`SunAndSky.eval`, ``sky``, ``sun``, ``pdf``, ``sample_direction``)
 and :func:`preetham_xyY` / :func:`xyY_to_linear_srgb` run these kernels over rows.
 
 Examples
 --------
 >>> sky = SunAndSky(sun_direction_from_angles(45.0, 0.0), turbidity=3.0)
->>> s = sky.sample_li(np.zeros((4, 3)), np.random.default_rng(0).random((4, 2)))
->>> bool(np.all(s.pdf > 0)), bool(np.all(np.isfinite(s.radiance)))
+>>> wi = sky.sample_direction(np.random.default_rng(0).random((4, 2)))
+>>> bool(np.all(sky.pdf(wi) > 0)), bool(np.all(np.isfinite(sky.eval(wi))))
 (True, True)
 >>> round(float(sky.sun_illuminance), -2)        # lux at 45 degrees, T = 3
 87400.0
@@ -72,7 +72,7 @@ from render._typing import Arr, ArrayLike, Rgb, Vec3
 from render.df import _kernel_common as kc
 from render.frame import Frame
 from render.jit import njit
-from render.lights import INFINITE_DISTANCE, Light, LightSample
+from render.lights import Light
 from render.numerics import luminance, safe_sqrt
 
 __all__ = [
@@ -510,7 +510,7 @@ class SunAndSky(Light):
         Irradiance of the sky alone on an upward-facing surface (quadrature).
     ground_radiance : (3,) float64
     p_sun : float
-        Probability that :meth:`sample_li` samples the sun.
+        Probability that :meth:`sample_direction` samples the sun.
 
     Examples
     --------
@@ -661,15 +661,10 @@ class SunAndSky(Light):
             self.p_sun = min(0.95, max(0.05, sun_power / (sun_power + sky_power)))
 
     def pdf(self, d: np.ndarray) -> np.ndarray:
-        """Solid-angle density (n,) with which :meth:`sample_li` picks unit directions ``d``."""
+        """Solid-angle density (n,) with which :meth:`sample_direction` picks unit
+        directions ``d``."""
         return _pdf_rows(self.kernel_params(), self._p, _rows(d, 3))
 
     def sample_direction(self, u: np.ndarray) -> Vec3:
         """Directions (n, 3) distributed with density :meth:`pdf`, from ``u`` (n, 2) in [0, 1)."""
         return _sample_rows(self.kernel_params(), self._p, self._cdf, _rows(u, 2))
-
-    def sample_li(self, p, u):
-        wi = self.sample_direction(u)
-        pdf = self.pdf(wi)
-        li = np.where((pdf > 0)[:, None], self.eval(wi), 0.0)
-        return LightSample(wi, np.full(len(p), INFINITE_DISTANCE), li, pdf, False)

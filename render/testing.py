@@ -14,7 +14,9 @@ layers included:
 * :func:`furnace` — Monte-Carlo directional albedo (mean sample weight) with its
   standard error;
 * :func:`reciprocity_error`, :func:`consistency_error` — Helmholtz reciprocity and
-  ``sample`` versus ``eval``/``pdf``.
+  ``sample`` versus ``eval``/``pdf``;
+* :func:`light_tables`, :func:`light_samples` — the lights of a scene as the render
+  kernels see them, and samples of them by the kernel that renders.
 
 ``scipy`` (the ``test`` extra) is imported only by :func:`chi2_test`.
 """
@@ -31,6 +33,8 @@ from render.bsdf import Bsdf, BsdfSample
 from render.numerics import unitize
 
 __all__ = [
+    "light_tables",
+    "light_samples",
     "Chi2Result",
     "chi2_test",
     "chi2_tables",
@@ -557,3 +561,32 @@ def default_centers(wo: ArrayLike, transmitted: ArrayLike | None = None) -> dict
     if transmitted is not None:
         out[-side] = np.asarray(transmitted, dtype=np.float64)
     return out
+
+
+def light_tables(lights, objects=()):
+    """The render kernels' tables (:class:`render.path.Tables`) of a scene with these
+    lights and objects (a small square far behind the camera when there are none)."""
+    from displacement.surfaces import UnitSquare
+    from render import material as M
+    from render.camera import Camera
+    from render.integrator import Integrator
+    from render.scene import RenderSettings, Scene, SceneObject, make_transform
+
+    objs = list(objects) or [SceneObject(UnitSquare(), M.material(),
+                                         make_transform(translate=(0.0, 0.0, 50.0)))]
+    cam = Camera(position=(0, 0, 5), look_at=(0, 0, 0), width=4, height=4)
+    scene = Scene(cam, objs, list(lights), RenderSettings(4, 4, spp=1))
+    return Integrator(scene, scene.build()).tables
+
+
+def light_samples(lights, p: ArrayLike, u: ArrayLike, objects=()):
+    """Samples of the first light of a scene from points ``p`` (n, 3) with uniforms
+    ``u`` (n, 2), by :func:`render.path.sample_light`: ``(wi, distance, radiance, pdf,
+    delta)``, the pdf divided by the light's selection probability."""
+    from render.path import sample_lights
+
+    tables = light_tables(lights, objects)
+    p = np.asarray(p, dtype=np.float64)
+    u = np.column_stack([np.zeros(len(p)), np.asarray(u, dtype=np.float64)])
+    wi, dist, li, pdf, delta, _ = sample_lights(tables, p, u)
+    return wi, dist, li, pdf / tables.scalars[0], delta

@@ -16,7 +16,6 @@ from render.lights import ConstantEnvironment, DirectionalLight, PointLight, Spo
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
 
 
-
 def diffuse(tint=1.0, **kw):
     return M.material(surface=M.material_surface(M.df.diffuse_reflection_bsdf(tint=tint)), **kw)
 

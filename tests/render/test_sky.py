@@ -21,16 +21,17 @@ from render.sky import (
     PARAMS_SIZE,
     RGB_UNIT_CONVERSION,
     SunAndSky,
+    preetham_xyY,
+    relative_air_mass,
     sun_and_sky_eval,
     sun_and_sky_pdf,
     sun_and_sky_sample,
-    preetham_xyY,
-    relative_air_mass,
     sun_color,
     sun_direction_from_angles,
     sun_normal_illuminance,
     xyY_to_linear_srgb,
 )
+from render.testing import light_samples
 
 # sun at the zenith, high, low, a hair above the horizon, on it, below it (twilight), night
 ELEVATIONS = (90.0, 60.0, 20.0, 0.5, 0.0, -3.0, -30.0)
@@ -166,13 +167,13 @@ def test_no_nan_at_zenith_horizon_and_below(elevation, rng):
     u = np.concatenate([rng.random((2000, 2)), [[0.0, 0.0], [1 - 2**-53] * 2, [0.0, 1 - 2**-53]]])
     with np.errstate(all="raise", under="ignore"):
         values = sky.eval(special), sky.pdf(special)
-        s = sky.sample_li(np.zeros((len(u), 3)), u)
-    for v in (*values, s.radiance, s.pdf, s.wi):
+        wi, _, li, pdf, _ = light_samples([sky], np.zeros((len(u), 3)), u)
+    for v in (*values, li, pdf, wi):
         assert np.all(np.isfinite(v))
     assert np.all(values[0] >= 0) and np.all(values[1] > 0)
-    assert np.all(s.radiance >= 0) and np.all(s.pdf > 0)
-    assert np.allclose(np.linalg.norm(s.wi, axis=1), 1.0)
-    assert np.allclose(sky.eval(s.wi), s.radiance) and np.allclose(sky.pdf(s.wi), s.pdf)
+    assert np.all(li >= 0) and np.all(pdf > 0)
+    assert np.allclose(np.linalg.norm(wi, axis=1), 1.0)
+    assert np.allclose(sky.eval(wi), li) and np.allclose(sky.pdf(wi), pdf)
 
 
 # ------------------------------------------------------------------------ pdf, sampling
@@ -203,7 +204,7 @@ def _chi2(sky: SunAndSky, n: int, rng, nz=16, nphi=32):
     np.add.at(expected, bins(inside), sky.pdf(inside) * w_in)
     outside, w_out = _sun_centred(sky, 2048, 1024, -1.0, sky.cos_sun_radius)
     np.add.at(expected, bins(outside), sky.pdf(outside) * w_out)
-    wi = sky.sample_li(np.zeros((n, 3)), rng.random((n, 2))).wi
+    wi = light_samples([sky], np.zeros((n, 3)), rng.random((n, 2)))[0]
     observed = np.bincount(bins(wi), minlength=len(expected)).astype(float)
     expected *= n / expected.sum()
     keep = expected >= 5
@@ -249,8 +250,8 @@ def test_estimator_gives_the_horizontal_irradiance(elevation, rng):
     # E[L cos / pdf] over the upper hemisphere = E_sun sin(elevation) + E_sky
     sky = SunAndSky(sun_direction_from_angles(elevation, 0.0), turbidity=3.0)
     n = 400_000
-    s = sky.sample_li(np.zeros((n, 3)), rng.random((n, 2)))
-    contrib = s.radiance * (np.maximum(s.wi[:, 1], 0.0) / s.pdf)[:, None]
+    wi, _, li, pdf, _ = light_samples([sky], np.zeros((n, 3)), rng.random((n, 2)))
+    contrib = li * (np.maximum(wi[:, 1], 0.0) / pdf)[:, None]
     mean, err = contrib.mean(axis=0), contrib.std(axis=0) / math.sqrt(n)
     want = sky.sun_irradiance * math.sin(math.radians(elevation)) + sky.sky_irradiance
     assert np.all(np.abs(mean - want) < 4 * err + 1e-9), (mean, want, err)

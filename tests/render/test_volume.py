@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 import pytest
 import trimesh
+from numba import njit
 from scipy import stats
 
 from displacement.surfaces import Cube, Plane, UnitSquare, UVSphere
