@@ -253,8 +253,8 @@ class Integrator:
         for k in range(n_obj):
             if not self.bound[k]:
                 self.programs[2 * k] = self._constant_program(k, back=False)
-                self.programs[2 * k + 1] = (self._constant_program(k, back=True)
-                                            if self.two_faced[k] else self.programs[2 * k])
+                if self.two_faced[k]:  # slot 2k + 1 is read for two-faced objects only
+                    self.programs[2 * k + 1] = self._constant_program(k, back=True)
         #: objects whose programs read the IOR outside them (rebound per lane inside
         #: other objects)
         self.ior_sensitive = np.array(

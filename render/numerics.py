@@ -31,7 +31,6 @@ __all__ = [
     "norm",
     "cross",
     "row_max",
-    "row_any",
     "unitize",
     "luminance",
     "reflect",
@@ -186,8 +185,7 @@ def dot(a: Vec3, b: Vec3) -> Arr:
     """
     a = np.asarray(a)
     b = np.asarray(b)
-    # column products summed in einsum's order (x + z) + y: same bits, about twice as fast
-    return a[..., 0] * b[..., 0] + a[..., 2] * b[..., 2] + a[..., 1] * b[..., 1]
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
 
 
 def norm(v: Vec3) -> Arr:
@@ -230,18 +228,6 @@ def row_max(a: Vec3) -> Arr:
     """
     a = np.asarray(a)
     return np.maximum(np.maximum(a[..., 0], a[..., 1]), a[..., 2])
-
-
-def row_any(b: np.ndarray) -> np.ndarray:
-    """Whether any entry of each (n, 3) bool row is set (``b.any(axis=-1)``, faster).
-
-    Examples
-    --------
-    >>> row_any(np.array([[False, False, True], [False, False, False]])).tolist()
-    [True, False]
-    """
-    b = np.asarray(b)
-    return b[..., 0] | b[..., 1] | b[..., 2]
 
 
 def unitize(v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
