@@ -403,6 +403,26 @@ def _copy_row(src, i, dst, j):
 
 
 @njit(inline="always")
+def _copy_lane(a, b, c, d, i, na, nb, nc, nd, j):
+    """Row ``i`` of four per-lane arrays to row ``j`` of four others."""
+    _copy_row(a, i, na, j)
+    _copy_row(b, i, nb, j)
+    _copy_row(c, i, nc, j)
+    _copy_row(d, i, nd, j)
+
+
+@njit(inline="always")
+def _roulette(b0, b1, b2, mis, u):
+    """Russian roulette on a throughput (spectral-MIS normalised): (survives, b0, b1, b2)
+    with survival probability min(max channel, 0.95)."""
+    q = min(max(max(b0, b1), b2) / mis, 0.95)
+    if not u < q:
+        return False, b0, b1, b2
+    q = max(q, 1e-300)
+    return True, b0 / q, b1 / q, b2 / q
+
+
+@njit(inline="always")
 def _attributes(packed, faces, face_normal, f, w1, w2):
     """Position, unit shading normal (the face's where it degenerates), unit tangent and
     uv at barycentrics (w1, w2) of triangle ``f``."""
@@ -588,17 +608,12 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
                 continue
             b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
             if depth >= rr_depth:
-                q = min(max(max(b0, b1), b2) / mis, 0.95)
-                if not u[i, 8] < q:
+                survives, b0, b1, b2 = _roulette(b0, b1, b2, mis, u[i, 8])
+                if not survives:
                     continue
-                q = max(q, 1e-300)
-                b0, b1, b2 = b0 / q, b1 / q, b2 / q
             if not (b0 > 0.0 or b1 > 0.0 or b2 > 0.0):
                 continue
-            _copy_row(lf, i, nlf, nn)
-            _copy_row(li, i, nli, nn)
-            _copy_row(so, i, nso, nn)
-            _copy_row(sior, i, nsior, nn)
+            _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
             nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = px, py, pz
             nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = wix, wiy, wiz
             nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
@@ -641,10 +656,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # cutouts: pass straight through with probability 1 - opacity
         if (flags & CUTOUT) and u[i, 1] >= opacity and crossings < MAX_CROSSINGS:
             side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
-            _copy_row(lf, i, nlf, nn)
-            _copy_row(li, i, nli, nn)
-            _copy_row(so, i, nso, nn)
-            _copy_row(sior, i, nsior, nn)
+            _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
             nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = (
                 px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
             nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
@@ -739,17 +751,12 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             continue
         b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
         if not straight and depth >= rr_depth:
-            q = min(max(max(b0, b1), b2) / mis, 0.95)
-            if not u[i, 8] < q:
+            survives, b0, b1, b2 = _roulette(b0, b1, b2, mis, u[i, 8])
+            if not survives:
                 continue
-            q = max(q, 1e-300)
-            b0, b1, b2 = b0 / q, b1 / q, b2 / q
         if straight:
             nx2, ny2, nz2 = dx, dy, dz
-        _copy_row(lf, i, nlf, nn)
-        _copy_row(li, i, nli, nn)
-        _copy_row(so, i, nso, nn)
-        _copy_row(sior, i, nsior, nn)
+        _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
         # a transmission through a closed object enters or leaves it
         if encloses and g_new * g_wo < 0.0:
             if front:
@@ -882,10 +889,7 @@ def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, p
             continue
         if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
             continue
-        _copy_row(sf, i, nsf, nn)
-        _copy_row(si, i, nsi, nn)
-        _copy_row(sso, i, nso, nn)
-        _copy_row(ssior, i, nsior, nn)
+        _copy_lane(sf, si, sso, ssior, i, nsf, nsi, nso, nsior, nn)
         if crossing and (flags & ENCLOSES):
             if front:
                 nsi[nn, S_NSTK] = stack_push(nso, nsior, nn, nstk, k, entry_ior)
