@@ -17,7 +17,7 @@ How the work travels:
 * **Dicing on each worker.**  Each worker builds the geometry (dicing, Embree BVH) and
   the integrator once, in a first task, before the time budget starts.  Dicing there
   costs every worker the same wall time as dicing on the client, and ships a scene
-  that is far smaller than its diced mesh (``benchmarks/distributed.py`` measures
+  that is far smaller than its diced mesh (``benchmarks/cluster_speed.py`` measures
   both; ``docs/distributed.md``).
 * **Chunks as tasks.**  A task renders one chunk and returns its patch.  The client
   keeps a window of chunks in flight (twice the cluster's threads, at least one pass)
@@ -208,13 +208,16 @@ def _scene_plugin_class():
     class ScenePlugin(WorkerPlugin):
         """The pickled scene on one worker, and its integrator once built."""
 
-        def __init__(self, payload: bytes, aovs: tuple, path: str, identity: dict):
+        def __init__(self, payload: bytes, aovs: tuple, path: str, identity: dict,
+                     numba_threads: dict):
             self.payload = payload
             self.aovs = aovs
             self.path = path
             self.identity = identity
+            self.numba_threads = numba_threads
 
         def setup(self, worker) -> None:
+            _keep_freed_memory()
             self.lock = threading.Lock()
             self.integrator = None
             self.build_s = None
@@ -250,14 +253,57 @@ def _scene_plugin_class():
     return ScenePlugin
 
 
+def _keep_freed_memory() -> None:
+    """Let glibc keep freed memory for reuse in this worker process.
+
+    Dask's nannies start workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes
+    glibc's mmap threshold at 128 kB: every numpy temporary of a chunk (65536 lanes) is
+    then mapped and unmapped anew, and chunks took 2-2.5 times as long as in-process.
+    These are glibc's own dynamic limits at their largest (32 MB mmap, 64 MB trim)."""
+    import ctypes
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+    except OSError:  # not glibc (musl): no such variable to undo
+        return
+    m_trim_threshold, m_mmap_threshold = -1, -3
+    libc.mallopt(m_mmap_threshold, 32 << 20)
+    libc.mallopt(m_trim_threshold, 64 << 20)
+
+
 def _plugin(name: str):
+    """This worker and its scene plugin; the calling task thread's numba parallel regions
+    set to this host's share of cores (numba would start one thread per core in every
+    task thread of every worker, and spinning OpenMP threads on busy cores slow each
+    chunk several times)."""
+    import numba
     from distributed import get_worker
 
     worker = get_worker()
     plugin = worker.plugins.get(name)
     if plugin is None:
         raise ClusterError(f"worker {worker.address} has no scene {name!r} (was it unregistered?)")
+    share = plugin.numba_threads.get(_host(worker.address))
+    if share is not None:
+        numba.set_num_threads(min(share, numba.config.NUMBA_NUM_THREADS))
     return worker, plugin
+
+
+def _host(address: str) -> str:
+    """The host of a worker address (``tcp://127.0.0.1:4567`` -> ``127.0.0.1``)."""
+    return address.split("://")[-1].rsplit(":", 1)[0]
+
+
+def _numba_threads(client) -> dict:
+    """Per host: its cores over the task threads of its workers (at least 1)."""
+    threads: dict = {}
+    for address, n in client.nthreads().items():
+        threads[_host(address)] = threads.get(_host(address), 0) + n
+    cores = {_host(a): n for a, n in client.run(os.cpu_count).items()}
+    return {h: max(1, (cores.get(h) or 1) // n) for h, n in threads.items()}
 
 
 def _prepare_task(name: str) -> dict:
@@ -305,9 +351,15 @@ def render_on_cluster(
     progress: bool = True,
     denoise: bool = False,
     path: str = "auto",
+    chunk: int | None = None,
 ) -> Film:
     """Render a scene on a Dask cluster; the arguments are those of
     :func:`render.integrator.render`, with the cluster's ``client`` for ``threads``.
+
+    ``chunk`` sets the samples per task (default :data:`render.passes.CHUNK`): larger
+    chunks cost the scheduler and the client less per sample on a large cluster
+    (``docs/distributed.md``), but draw other random streams, so the image is the
+    in-process one only with the default.
 
     Returns
     -------
@@ -315,7 +367,7 @@ def render_on_cluster(
         Bit-identical to the in-process render with the same seed and samples.
         ``film.stats`` has the in-process keys, plus ``workers`` (per worker address:
         ``chunks``, ``trace_s``, ``build_s``, ``builds`` (times it built the scene:
-        1), ``pid``), ``scene_bytes`` (the pickled
+        1), ``pid``), ``merge_s`` (the client merging patches), ``scene_bytes`` (the pickled
         scene), ``patch_bytes`` (all results) and ``prepare_s`` (until every worker had
         built the scene).
 
@@ -336,7 +388,7 @@ def render_on_cluster(
     if denoise:
         aov_list = list(dict.fromkeys(aov_list + ["albedo", "normal"]))
     film = Film(scene.camera.width, scene.camera.height, aov_list)
-    plan = PassPlan.of(scene.settings, film.pixel_count, spp, time, seed)
+    plan = PassPlan.of(scene.settings, film.pixel_count, spp, time, seed, chunk)
 
     _wait_for_workers(client)
     _check_workers(client)
@@ -344,7 +396,8 @@ def render_on_cluster(
     payload = cloudpickle.dumps(scene)
     token = hashlib.sha256(payload).hexdigest()[:12]
     name = f"pwc-scene-{token}-{uuid.uuid4().hex[:8]}"
-    plugin = _scene_plugin_class()(payload, tuple(film.aov_names), path, worker_identity())
+    plugin = _scene_plugin_class()(payload, tuple(film.aov_names), path, worker_identity(),
+                                   _numba_threads(client))
     client.register_plugin(plugin, name=name)
     try:
         prepared = _prepare(client, name, progress)
@@ -376,6 +429,7 @@ def render_on_cluster(
         workers=workers,
         scene_bytes=len(payload),
         patch_bytes=stats["patch_bytes"],
+        merge_s=stats["merge_s"],
         prepare_s=prepare_s,
     )
     if denoise:
@@ -447,7 +501,7 @@ def _render_passes(client, name: str, plan: PassPlan, film: Film, progress: bool
 
         desc = f"render on {len(client.nthreads())} workers"
         bar = tqdm(total=plan.chunk_count, unit="chunk", desc=desc, leave=False)
-    stats = {"workers": {}, "rays": 0, "embree_s": 0.0, "patch_bytes": 0}
+    stats = {"workers": {}, "rays": 0, "embree_s": 0.0, "patch_bytes": 0, "merge_s": 0.0}
     todo = _items(plan)
     in_flight: dict = {}  # future -> (pass, first sample of the chunk)
     done: dict = {}  # pass -> {first sample: patch}
@@ -494,11 +548,13 @@ def _render_passes(client, name: str, plan: PassPlan, film: Film, progress: bool
             if bar is not None:
                 bar.update(1)
             # whole passes, in order, chunks in order: the in-process sums, bit for bit
+            t_merge = _time.perf_counter()
             while len(done.get(merged, ())) == size.get(merged, -1):
                 for _, p in sorted(done.pop(merged).items()):
                     film.merge(p)
                 spp += plan.pass_spp(merged)
                 merged += 1
+            stats["merge_s"] += _time.perf_counter() - t_merge
             if merged == plan.passes or (merged > 0 and over()):
                 break
             if not over():

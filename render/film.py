@@ -293,11 +293,11 @@ class FilmPatch:
         aov = {}
         for name in keep:
             if name != "object_id" and name in aovs:
-                val = np.asarray(aovs[name], dtype=np.float64).reshape(len(pixel), -1)
+                k = len(AOVS[name])
+                val = np.asarray(aovs[name], dtype=np.float64).reshape(len(pixel), k)
                 aov[name] = np.stack(
-                    [np.bincount(local, val[:, c], minlength=m) for c in range(val.shape[1])],
-                    axis=1,
-                )
+                    [np.bincount(local, val[:, c], minlength=m) for c in range(k)], axis=1
+                ).reshape(m, k)
         object_id = object_id_set = None
         if "object_id" in keep and "object_id" in aovs:
             ids = np.asarray(aovs["object_id"], dtype=np.int32)
