@@ -220,7 +220,7 @@ def _scene_plugin_class():
             _keep_freed_memory()
             self.lock = threading.Lock()
             self.integrator = None
-            self.build_s = None
+            self.build_s = self.geometry_s = None
             self.geometry_stats = None
             self.builds = 0
 
@@ -243,7 +243,9 @@ def _scene_plugin_class():
 
                     t0 = _time.perf_counter()
                     scene = pickle.loads(self.payload)
+                    t1 = _time.perf_counter()
                     geometry = scene.build()
+                    self.geometry_s = _time.perf_counter() - t1
                     self.integrator = Integrator(scene, geometry, self.aovs, path=self.path)
                     self.build_s = _time.perf_counter() - t0
                     self.builds += 1
@@ -314,6 +316,7 @@ def _prepare_task(name: str) -> dict:
         "worker": worker.address,
         "pid": os.getpid(),
         "build_s": plugin.build_s,
+        "geometry_s": plugin.geometry_s,
         "triangles": integ.geo.triangle_count,
         "geometry": plugin.geometry_stats,
         "path": "general" if integ.compiled is None else "compiled",
@@ -366,8 +369,9 @@ def render_on_cluster(
     Film
         Bit-identical to the in-process render with the same seed and samples.
         ``film.stats`` has the in-process keys, plus ``workers`` (per worker address:
-        ``chunks``, ``trace_s``, ``build_s``, ``builds`` (times it built the scene:
-        1), ``pid``), ``merge_s`` (the client merging patches), ``scene_bytes`` (the pickled
+        ``chunks``, ``trace_s``, ``build_s`` (unpickle, geometry, integrator),
+        ``geometry_s`` (dicing and BVH), ``builds`` (times it built the scene: 1),
+        ``pid``), ``merge_s`` (the client merging patches), ``scene_bytes`` (the pickled
         scene), ``patch_bytes`` (all results) and ``prepare_s`` (until every worker had
         built the scene).
 
@@ -413,6 +417,7 @@ def render_on_cluster(
     for address, info in prepared.items():
         workers.setdefault(address, {"chunks": 0, "trace_s": 0.0, "pid": info["pid"]})
         workers[address]["build_s"] = info["build_s"]
+        workers[address]["geometry_s"] = info["geometry_s"]
     elapsed = stats["time_s"]
     film.stats.update(
         passes=stats["passes"],
@@ -425,6 +430,7 @@ def render_on_cluster(
         path=first["path"],
         general_reason=first["general_reason"],
         build_s=max(info["build_s"] for info in prepared.values()),
+        geometry_s=max(info["geometry_s"] for info in prepared.values()),
         geometry=first["geometry"],
         workers=workers,
         scene_bytes=len(payload),
