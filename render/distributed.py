@@ -19,9 +19,10 @@ How the work travels:
   costs every worker the same wall time as dicing on the client, and ships a scene
   that is far smaller than its diced mesh (``benchmarks/cluster_speed.py`` measures
   both; ``docs/distributed.md``).
-* **Chunks as tasks.**  A task renders one chunk and returns its patch.  The client
-  keeps a window of chunks in flight (twice the cluster's threads, at least one pass)
-  so every worker stays busy across passes.  A worker that dies takes its running
+* **Chunks as tasks.**  A task renders consecutive chunks of a pass (one per 8 threads
+  of the cluster, at least one) and returns their patches.  The client keeps a window
+  of tasks in flight (twice the cluster's threads, at least one pass) so every worker
+  stays busy across passes.  A worker that dies takes its running
   chunks with it; the scheduler runs them again elsewhere, and since a chunk's result
   depends only on its random stream, the image is unchanged.
 * **The time budget** holds across workers: once it is spent (and one pass is merged)
@@ -57,8 +58,12 @@ __all__ = [
 
 #: seconds to wait for a scheduler to answer, and for its first worker
 CONNECT_TIMEOUT = 30.0
-#: chunks in flight per thread of the cluster (enough to hide a chunk's round trip)
+#: tasks in flight per thread of the cluster (enough to hide a task's round trip)
 IN_FLIGHT_PER_THREAD = 2
+#: by default a task holds one chunk per this many threads of the cluster: the scheduler
+#: and the client spend a few ms per task, so 100 threads need tasks of ~12 chunks
+#: (docs/distributed.md)
+THREADS_PER_CHUNK_IN_TASK = 8
 
 
 class ClusterError(RuntimeError):
@@ -324,13 +329,14 @@ def _prepare_task(name: str) -> dict:
     }
 
 
-def _chunk_task(name: str, seed: int, item) -> tuple:
-    """Render one chunk on this worker: its patch and what it cost."""
+def _chunks_task(name: str, seed: int, items) -> tuple:
+    """Render consecutive chunks on this worker: their patches, in order (each chunk's
+    own, not their sum: the client adds them one by one, as in-process), and the cost."""
     worker, plugin = _plugin(name)
     integ = plugin.prepared()
     rays, embree = integ.rays, integ.embree_time
     t0 = _time.perf_counter()
-    patch = render_chunk(integ, seed, item)
+    patches = [render_chunk(integ, seed, item) for item in items]
     info = {
         "worker": worker.address,
         "pid": os.getpid(),
@@ -340,7 +346,7 @@ def _chunk_task(name: str, seed: int, item) -> tuple:
         "rays": integ.rays - rays,
         "embree_s": integ.embree_time - embree,
     }
-    return patch, info
+    return patches, info
 
 
 # --------------------------------------------------------------------------- render
@@ -354,15 +360,15 @@ def render_on_cluster(
     progress: bool = True,
     denoise: bool = False,
     path: str = "auto",
-    chunk: int | None = None,
+    chunks_per_task: int | None = None,
 ) -> Film:
     """Render a scene on a Dask cluster; the arguments are those of
     :func:`render.integrator.render`, with the cluster's ``client`` for ``threads``.
 
-    ``chunk`` sets the samples per task (default :data:`render.passes.CHUNK`): larger
-    chunks cost the scheduler and the client less per sample on a large cluster
-    (``docs/distributed.md``), but draw other random streams, so the image is the
-    in-process one only with the default.
+    ``chunks_per_task`` (default: one per 8 threads of the cluster, at least one) sets
+    how many consecutive chunks of a pass one task renders: the scheduler and the client
+    pay per task, so a large cluster needs longer tasks (``docs/distributed.md``); the
+    chunks, their random streams and the image stay the same.
 
     Returns
     -------
@@ -371,7 +377,8 @@ def render_on_cluster(
         ``film.stats`` has the in-process keys, plus ``workers`` (per worker address:
         ``chunks``, ``trace_s``, ``build_s`` (unpickle, geometry, integrator),
         ``geometry_s`` (dicing and BVH), ``builds`` (times it built the scene: 1),
-        ``pid``), ``merge_s`` (the client merging patches), ``scene_bytes`` (the pickled
+        ``pid``), ``merge_s`` (the client merging patches), ``tasks`` and
+        ``chunks_per_task``, ``scene_bytes`` (the pickled
         scene), ``patch_bytes`` (all results) and ``prepare_s`` (until every worker had
         built the scene).
 
@@ -392,7 +399,9 @@ def render_on_cluster(
     if denoise:
         aov_list = list(dict.fromkeys(aov_list + ["albedo", "normal"]))
     film = Film(scene.camera.width, scene.camera.height, aov_list)
-    plan = PassPlan.of(scene.settings, film.pixel_count, spp, time, seed, chunk)
+    plan = PassPlan.of(scene.settings, film.pixel_count, spp, time, seed)
+    if chunks_per_task is not None and chunks_per_task < 1:
+        raise ValueError(f"chunks_per_task must be >= 1, got {chunks_per_task}")
 
     _wait_for_workers(client)
     _check_workers(client)
@@ -406,7 +415,7 @@ def render_on_cluster(
     try:
         prepared = _prepare(client, name, progress)
         prepare_s = _time.perf_counter() - t0
-        stats = _render_passes(client, name, plan, film, progress)
+        stats = _render_passes(client, name, plan, film, progress, chunks_per_task)
     finally:
         try:
             client.unregister_worker_plugin(name)
@@ -436,6 +445,8 @@ def render_on_cluster(
         scene_bytes=len(payload),
         patch_bytes=stats["patch_bytes"],
         merge_s=stats["merge_s"],
+        tasks=stats["tasks"],
+        chunks_per_task=stats["chunks_per_task"],
         prepare_s=prepare_s,
     )
     if denoise:
@@ -494,23 +505,28 @@ def _explain(error: Exception, doing: str) -> Exception:
     return error
 
 
-def _render_passes(client, name: str, plan: PassPlan, film: Film, progress: bool) -> dict:
-    """Submit the chunks in (pass, chunk) order, keep a window of them in flight, and
-    merge whole passes in order as they complete."""
+def _render_passes(
+    client, name: str, plan: PassPlan, film: Film, progress: bool, per_task: int | None
+) -> dict:
+    """Submit the chunks in (pass, chunk) order, ``per_task`` consecutive chunks of a
+    pass in a task, keep a window of tasks in flight, and merge whole passes in order
+    as they complete."""
     from distributed import as_completed
 
     threads = sum(client.nthreads().values()) or 1
-    window = max(IN_FLIGHT_PER_THREAD * threads, len(plan.chunks(0)))
+    per_task = per_task or max(1, threads // THREADS_PER_CHUNK_IN_TASK)
+    window = max(IN_FLIGHT_PER_THREAD * threads, -(-len(plan.chunks(0)) // per_task))
     bar = None
     if progress:
         from tqdm import tqdm
 
         desc = f"render on {len(client.nthreads())} workers"
         bar = tqdm(total=plan.chunk_count, unit="chunk", desc=desc, leave=False)
-    stats = {"workers": {}, "rays": 0, "embree_s": 0.0, "patch_bytes": 0, "merge_s": 0.0}
-    todo = _items(plan)
-    in_flight: dict = {}  # future -> (pass, first sample of the chunk)
-    done: dict = {}  # pass -> {first sample: patch}
+    stats = {"workers": {}, "rays": 0, "embree_s": 0.0, "patch_bytes": 0, "merge_s": 0.0,
+             "chunks_per_task": per_task, "tasks": 0}
+    todo = _tasks(plan, per_task)
+    in_flight: dict = {}  # future -> its items
+    done: dict = {}  # pass -> {first sample of a chunk: patch}
     size: dict = {}  # pass -> its number of chunks
     merged = spp = 0
     start = _time.perf_counter()
@@ -521,38 +537,41 @@ def _render_passes(client, name: str, plan: PassPlan, film: Film, progress: bool
 
     def submit(count: int) -> None:
         for _ in range(count):
-            item = next(todo, None)
-            if item is None:
+            items = next(todo, None)
+            if items is None:
                 return
-            k, _, (a, _) = item
+            k, _, (a, _) = items[0]
             if k not in size:
                 size[k] = len(plan.chunks(k))
             fut = client.submit(
-                _chunk_task, name, plan.seed, item, key=f"{name}-chunk-{k}-{a}", pure=False
+                _chunks_task, name, plan.seed, items, key=f"{name}-chunks-{k}-{a}", pure=False
             )
-            in_flight[fut] = (k, a)
+            in_flight[fut] = items
             ac.add(fut)
 
     try:
         submit(window)  # the first pass whole, whatever the budget
         for fut in ac:
-            k, a = in_flight.pop(fut)
+            items = in_flight.pop(fut)
             try:
-                patch, info = fut.result()
+                patches, info = fut.result()
             except Exception as e:
+                k, _, (a, _) = items[0]
                 raise _explain(e, f"chunk {a} of pass {k}") from None
-            done.setdefault(k, {})[a] = patch
+            for (k, _, (a, _)), patch in zip(items, patches, strict=True):
+                done.setdefault(k, {})[a] = patch
+                stats["patch_bytes"] += patch.nbytes
             w = stats["workers"].setdefault(
                 info["worker"], {"chunks": 0, "trace_s": 0.0, "pid": info["pid"]}
             )
-            w["chunks"] += 1
+            w["chunks"] += len(items)
             w["builds"] = max(w.get("builds", 0), info["builds"])
             w["trace_s"] += info["trace_s"]
             stats["rays"] += info["rays"]
             stats["embree_s"] += info["embree_s"]
-            stats["patch_bytes"] += patch.nbytes
+            stats["tasks"] += 1
             if bar is not None:
-                bar.update(1)
+                bar.update(len(items))
             # whole passes, in order, chunks in order: the in-process sums, bit for bit
             t_merge = _time.perf_counter()
             while len(done.get(merged, ())) == size.get(merged, -1):
@@ -574,9 +593,12 @@ def _render_passes(client, name: str, plan: PassPlan, film: Film, progress: bool
     return stats
 
 
-def _items(plan: PassPlan):
-    """The work items of every pass in order (endless with a time budget)."""
+def _tasks(plan: PassPlan, per_task: int):
+    """The work items of every pass in order, ``per_task`` consecutive ones of a pass at a
+    time (endless with a time budget)."""
     k = 0
     while plan.passes is None or k < plan.passes:
-        yield from plan.chunks(k)
+        items = plan.chunks(k)
+        for i in range(0, len(items), per_task):
+            yield items[i:i + per_task]
         k += 1

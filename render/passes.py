@@ -48,8 +48,6 @@ class PassPlan:
     time_budget : float or None
         Seconds.
     seed : int
-    chunk : int
-        Samples per chunk (:data:`CHUNK`; another size cuts other random streams).
 
     Examples
     --------
@@ -68,18 +66,12 @@ class PassPlan:
     spp: int
     time_budget: float | None
     seed: int
-    chunk: int = CHUNK
 
     @classmethod
-    def of(
-        cls, settings, npix: int, spp=None, time_budget=None, seed=None, chunk=None
-    ) -> PassPlan:
+    def of(cls, settings, npix: int, spp=None, time_budget=None, seed=None) -> PassPlan:
         """The plan for ``npix`` pixels: ``spp``, ``time_budget`` and ``seed`` override the
         scene's :class:`~render.scene.RenderSettings` (without either budget, the scene's
-        ``time`` if set, else its ``spp``); ``chunk`` samples per chunk (:data:`CHUNK`)."""
-        chunk = CHUNK if chunk is None else int(chunk)
-        if chunk < 1:
-            raise ValueError(f"a chunk holds >= 1 sample, got {chunk}")
+        ``time`` if set, else its ``spp``)."""
         if spp is None and time_budget is None:
             time_budget = settings.time
         spp = settings.spp if spp is None else int(spp)
@@ -90,7 +82,7 @@ class PassPlan:
         if not time_budget:
             per_pass = min(per_pass, spp)
         passes = None if time_budget else -(-spp // per_pass)
-        return cls(int(npix), per_pass, passes, spp, time_budget or None, seed, chunk)
+        return cls(int(npix), per_pass, passes, spp, time_budget or None, seed)
 
     def pass_spp(self, k: int) -> int:
         """Samples per pixel of pass ``k`` (the last pass of an spp budget may be short)."""
@@ -102,14 +94,14 @@ class PassPlan:
         """The work items of pass ``k``: ``(k, pass_spp, (a, b))`` for samples ``[a, b)``."""
         k_spp = self.pass_spp(k)
         per = self.npix * k_spp
-        return [(k, k_spp, (a, min(a + self.chunk, per))) for a in range(0, per, self.chunk)]
+        return [(k, k_spp, (a, min(a + CHUNK, per))) for a in range(0, per, CHUNK)]
 
     @property
     def chunk_count(self) -> int | None:
         """Chunks of the whole image (None with a time budget)."""
         if self.passes is None:
             return None
-        return sum(-(-self.npix * self.pass_spp(k) // self.chunk) for k in range(self.passes))
+        return sum(-(-self.npix * self.pass_spp(k) // CHUNK) for k in range(self.passes))
 
 
 def chunk_rng(seed: int, pass_index: int, start: int) -> np.random.Generator:

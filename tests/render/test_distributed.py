@@ -155,6 +155,13 @@ def test_same_image_as_in_process_on_two_workers(client2, shipped):
     assert film.stats["triangles"] == want.stats["triangles"] > 12 + 2
     # a patch is a pixel range's sums: 342 samples per pixel ship as one row
     assert film.stats["patch_bytes"] < 48 * 32 * 400 * 8
+    assert film.stats["chunks_per_task"] == 1 and film.stats["tasks"] == plan.chunk_count
+    # tasks of several chunks (as on a large cluster): fewer tasks, the same image
+    grouped = render_on_cluster(scene, client2, aovs=AOVS, progress=False, chunks_per_task=4)
+    assert_same_film(grouped, want)
+    assert grouped.stats["tasks"] == 3 + 1  # pass 0: 9 chunks in 3 tasks; pass 1: 2 in 1
+    with pytest.raises(ValueError, match="chunks_per_task must be >= 1"):
+        render_on_cluster(scene, client2, chunks_per_task=0)
 
 
 def test_same_image_on_one_worker_of_two_threads(shipped):
@@ -211,7 +218,7 @@ def test_a_killed_worker_changes_nothing(tmp_path):
         victim, deadline = None, time.monotonic() + 300
         while victim is None and time.monotonic() < deadline and thread.is_alive():
             for address, keys in client.processing().items():
-                if any("-chunk-" in str(k) for k in keys) and address in pids:
+                if any("-chunks-" in str(k) for k in keys) and address in pids:
                     victim = address
                     break
             time.sleep(0.02)
