@@ -19,7 +19,7 @@ How the work travels:
   costs every worker the same wall time as dicing on the client, and ships a scene
   that is far smaller than its diced mesh (``benchmarks/cluster_speed.py`` measures
   both; ``docs/distributed.md``).
-* **Chunks as tasks.**  A task renders consecutive chunks of a pass (one per 8 threads
+* **Chunks as tasks.**  A task renders consecutive chunks of a pass (one per 6 threads
   of the cluster, at least one) and returns their patches.  The client keeps a window
   of tasks in flight (twice the cluster's threads, at least one pass) so every worker
   stays busy across passes.  A worker that dies takes its running
@@ -61,9 +61,9 @@ CONNECT_TIMEOUT = 30.0
 #: tasks in flight per thread of the cluster (enough to hide a task's round trip)
 IN_FLIGHT_PER_THREAD = 2
 #: by default a task holds one chunk per this many threads of the cluster: the scheduler
-#: and the client spend a few ms per task, so 100 threads need tasks of ~12 chunks
-#: (docs/distributed.md)
-THREADS_PER_CHUNK_IN_TASK = 8
+#: and the client spend ~5 ms per task, so 100 threads of a fast scene need tasks of ~15
+#: chunks to stay above 90 % (docs/distributed.md)
+THREADS_PER_CHUNK_IN_TASK = 6
 
 
 class ClusterError(RuntimeError):
@@ -365,7 +365,7 @@ def render_on_cluster(
     """Render a scene on a Dask cluster; the arguments are those of
     :func:`render.integrator.render`, with the cluster's ``client`` for ``threads``.
 
-    ``chunks_per_task`` (default: one per 8 threads of the cluster, at least one) sets
+    ``chunks_per_task`` (default: one per 6 threads of the cluster, at least one) sets
     how many consecutive chunks of a pass one task renders: the scheduler and the client
     pay per task, so a large cluster needs longer tasks (``docs/distributed.md``); the
     chunks, their random streams and the image stay the same.
@@ -524,7 +524,7 @@ def _render_passes(
         bar = tqdm(total=plan.chunk_count, unit="chunk", desc=desc, leave=False)
     stats = {"workers": {}, "rays": 0, "embree_s": 0.0, "patch_bytes": 0, "merge_s": 0.0,
              "chunks_per_task": per_task, "tasks": 0}
-    todo = _tasks(plan, per_task)
+    todo = _tasks(plan, per_task, threads)
     in_flight: dict = {}  # future -> its items
     done: dict = {}  # pass -> {first sample of a chunk: patch}
     size: dict = {}  # pass -> its number of chunks
@@ -593,12 +593,23 @@ def _render_passes(
     return stats
 
 
-def _tasks(plan: PassPlan, per_task: int):
-    """The work items of every pass in order, ``per_task`` consecutive ones of a pass at a
-    time (endless with a time budget)."""
+def _tasks(plan: PassPlan, per_task: int, threads: int):
+    """The work items of every pass in order, up to ``per_task`` consecutive ones of a
+    pass at a time (endless with a time budget).  Near the end of an spp budget the
+    tasks shrink as OpenMP's *guided* schedule does, to the chunks left over twice the
+    threads, down to a quarter of ``per_task``: the last tasks leave workers idle for
+    less, without multiplying the tasks."""
+    left = plan.chunk_count
+    floor = max(1, per_task // 4)
     k = 0
     while plan.passes is None or k < plan.passes:
         items = plan.chunks(k)
-        for i in range(0, len(items), per_task):
-            yield items[i:i + per_task]
+        i = 0
+        while i < len(items):
+            n = per_task if left is None else max(floor, min(per_task, left // (2 * threads)))
+            group = items[i:i + n]
+            yield group
+            i += len(group)
+            if left is not None:
+                left -= len(group)
         k += 1

@@ -76,6 +76,13 @@ def register(subparsers) -> argparse.ArgumentParser:
     )
     add_cluster_options(p)
     p.add_argument(
+        "--chunks-per-task",
+        type=int,
+        metavar="N",
+        help="on a cluster: chunks of 65536 samples in one task (default: one per 6 threads "
+        "of the cluster); the same image",
+    )
+    p.add_argument(
         "--path",
         choices=("auto", "general", "compiled"),
         default="auto",
@@ -113,6 +120,8 @@ def run(args) -> int:
         return _error(f"--threads must be >= 1, got {args.threads}", EXIT_USAGE)
     if args.workers is not None and args.workers < 1:
         return _error(f"--workers must be >= 1, got {args.workers}", EXIT_USAGE)
+    if args.chunks_per_task is not None and args.chunks_per_task < 1:
+        return _error(f"--chunks-per-task must be >= 1, got {args.chunks_per_task}", EXIT_USAGE)
     if not str(args.output).lower().endswith(".exr"):
         return _error(f"the output must be an .exr file, got {args.output!r}", EXIT_USAGE)
     if args.png and not str(args.png).lower().endswith(".png"):
@@ -150,7 +159,8 @@ def run(args) -> int:
         if args.scheduler or args.workers:
             with cluster(args.scheduler, args.workers, args.threads or 1) as client:
                 film = render_on_cluster(scene, client, aovs=aovs, progress=progress,
-                                         denoise=args.denoise, path=args.path)
+                                         denoise=args.denoise, path=args.path,
+                                         chunks_per_task=args.chunks_per_task)
         else:
             film = render(scene, aovs=aovs, progress=progress, threads=args.threads or 2,
                           denoise=args.denoise, path=args.path)

@@ -159,7 +159,7 @@ def test_same_image_as_in_process_on_two_workers(client2, shipped):
     # tasks of several chunks (as on a large cluster): fewer tasks, the same image
     grouped = render_on_cluster(scene, client2, aovs=AOVS, progress=False, chunks_per_task=4)
     assert_same_film(grouped, want)
-    assert grouped.stats["tasks"] == 3 + 1  # pass 0: 9 chunks in 3 tasks; pass 1: 2 in 1
+    assert grouped.stats["chunks_per_task"] == 4 and grouped.stats["tasks"] < plan.chunk_count
     with pytest.raises(ValueError, match="chunks_per_task must be >= 1"):
         render_on_cluster(scene, client2, chunks_per_task=0)
 
@@ -170,6 +170,27 @@ def test_same_image_on_one_worker_of_two_threads(shipped):
         film = render_on_cluster(scene, client, aovs=AOVS, progress=True)
     assert_same_film(film, want)
     assert len(film.stats["workers"]) == 1
+
+
+@pytest.mark.parametrize("w, h, spp, per_task, threads", [
+    (3840, 2160, 64, 16, 100), (48, 32, 400, 4, 2), (64, 64, 1024, 1, 2), (7, 5, 3, 8, 1)])
+def test_tasks_cover_the_chunks_in_order_within_passes(w, h, spp, per_task, threads):
+    """Tasks hold consecutive chunks of one pass, every chunk once and in order, at most
+    per_task of them, and no fewer than a quarter of it except at the end of a pass."""
+    from render.distributed import _tasks
+    from render.scene import RenderSettings
+
+    plan = PassPlan.of(RenderSettings(w, h, spp=spp), w * h)
+    tasks = list(_tasks(plan, per_task, threads))
+    flat = [item for task in tasks for item in task]
+    assert flat == [item for k in range(plan.passes) for item in plan.chunks(k)]
+    for task in tasks:
+        assert len({k for k, _, _ in task}) == 1 and 1 <= len(task) <= per_task
+        k, _, (a, _) = task[-1]
+        ends_pass = task[-1] == plan.chunks(k)[-1]
+        assert ends_pass or len(task) >= max(1, per_task // 4)
+    if per_task > 1 and plan.chunk_count > 4 * threads * per_task:
+        assert len(tasks) < plan.chunk_count / 2
 
 
 def test_other_seed_other_image(client2, shipped):
@@ -240,7 +261,7 @@ def test_pwc_render_workers_is_the_in_process_image(tmp_path):
     scene = write_scene(tmp_path / "s", np.random.default_rng(3))
     common = ["render", scene, "--spp", "16", "--aov", "albedo,object_id", "--seed", "2"]
     r1 = run_pwc(*common, "-o", tmp_path / "one.exr")
-    r2 = run_pwc(*common, "-o", tmp_path / "two.exr", "--workers", "2")
+    r2 = run_pwc(*common, "-o", tmp_path / "two.exr", "--workers", "2", "--chunks-per-task", "2")
     assert r1.returncode == 0, r1.stderr
     assert r2.returncode == 0, r2.stderr
     assert "2 workers" in r2.stderr and "Traceback" not in r2.stderr
@@ -329,6 +350,9 @@ def test_cluster_errors_are_messages(tmp_path, monkeypatch):
     scene = write_scene(tmp_path / "s", np.random.default_rng(6))
     r = run_pwc("render", scene, "-o", tmp_path / "x.exr", "--workers", "0")
     assert r.returncode == 2 and "--workers must be >= 1" in r.stderr
+    r = run_pwc("render", scene, "-o", tmp_path / "x.exr", "--workers", "1",
+                "--chunks-per-task", "0")
+    assert r.returncode == 2 and "--chunks-per-task must be >= 1" in r.stderr
     r = run_pwc("render", scene, "-o", tmp_path / "x.exr", "--workers", "2", "--scheduler",
                 "tcp://127.0.0.1:1")
     assert r.returncode == 2 and "not allowed with argument" in r.stderr
