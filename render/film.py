@@ -14,11 +14,12 @@ EXR layout (OpenEXR 3.x API): channels ``R, G, B, A`` and one layer per AOV:
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Film", "AOVS", "empty_aovs", "linear_to_srgb", "read_exr"]
+__all__ = ["Film", "FilmPatch", "AOVS", "empty_aovs", "linear_to_srgb", "read_exr"]
 
 #: the AOVs a film can keep, and their channel names in the EXR.
 AOVS = {
@@ -101,32 +102,35 @@ class Film:
             Name -> (n, k) values; ``object_id`` -> (n,) ints (kept from the pixel's
             first added sample).
         """
-        pixel = np.asarray(pixel, dtype=np.int64)
-        m = self.pixel_count
-        bad = ~np.all(np.isfinite(rgb), axis=1)
-        if np.any(bad):
-            self.stats["nonfinite_samples"] = self.stats.get("nonfinite_samples", 0) + int(
-                bad.sum()
+        self.merge(FilmPatch.of_samples(pixel, rgb, alpha, aovs, self.aov_names))
+
+    def merge(self, patch: FilmPatch) -> None:
+        """Add a :class:`FilmPatch` (the sums of a batch of samples over its pixel range).
+
+        Merging the patches of batches in the order they were drawn gives the same bits
+        as adding the batches' samples in that order: a patch holds each pixel's sum of
+        the batch, summed in the batch's order, and the film adds it once.
+        """
+        start, stop = patch.start, patch.start + len(patch.count)
+        if stop > self.pixel_count or start < 0:
+            raise ValueError(
+                f"the patch covers pixels {start}..{stop - 1}, the film has {self.pixel_count}"
             )
-            rgb = np.where(bad[:, None], 0.0, rgb)
-        for c in range(3):
-            self._rgb[:, c] += np.bincount(pixel, rgb[:, c], minlength=m)
-        self._alpha += np.bincount(pixel, alpha, minlength=m)
-        self._count += np.bincount(pixel, minlength=m)
-        aovs = aovs or {}
+        if patch.nonfinite:
+            self.stats["nonfinite_samples"] = (
+                self.stats.get("nonfinite_samples", 0) + patch.nonfinite
+            )
+        span = slice(start, stop)
+        self._rgb[span] += patch.rgb
+        self._alpha[span] += patch.alpha
+        self._count[span] += patch.count
         for name, acc in self._aov.items():
-            if name in aovs:
-                val = np.asarray(aovs[name], dtype=np.float64).reshape(len(pixel), -1)
-                for c in range(acc.shape[1]):
-                    acc[:, c] += np.bincount(pixel, val[:, c], minlength=m)
-        if "object_id" in self.aov_names and "object_id" in aovs:
-            ids = np.asarray(aovs["object_id"], dtype=np.int32)
-            # the first sample of each pixel in this batch, for pixels not yet set
-            first = np.unique(pixel, return_index=True)[1]
-            p, v = pixel[first], ids[first]
-            new = ~self._object_id_set[p]
-            self._object_id[p[new]] = v[new]
-            self._object_id_set[p[new]] = True
+            if name in patch.aov:
+                acc[span] += patch.aov[name]
+        if "object_id" in self.aov_names and patch.object_id is not None:
+            new = (patch.object_id_set & ~self._object_id_set[span]).nonzero()[0] + start
+            self._object_id[new] = patch.object_id[new - start]
+            self._object_id_set[new] = True
         self._denoised = None
 
     def _mean(self, acc: np.ndarray) -> np.ndarray:
@@ -222,6 +226,104 @@ class Film:
         img = linear_to_srgb(self.rgb() * 2.0**exposure)
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Image.fromarray(np.round(img * 255.0).astype(np.uint8), "RGB").save(str(path))
+
+
+
+@dataclass(frozen=True)
+class FilmPatch:
+    """The per-pixel sums of one batch of samples over the pixel range it touches.
+
+    What a chunk of the image sends back (:mod:`render.passes`): ``count`` pixels from
+    ``start`` on, not one row per sample, so a chunk of ``k`` samples per pixel ships
+    ``k`` times less than its samples, and merging it into a :class:`Film` touches only
+    its range.
+
+    Attributes
+    ----------
+    start : int
+        First pixel (index ``y * width + x``).
+    rgb : (m, 3) float64
+        Sums of finite radiance samples (non-finite ones count as 0).
+    alpha : (m,) float64
+    count : (m,) int64
+        Samples per pixel.
+    aov : dict
+        Name -> (m, k) float64 sums, for the averaged AOVs kept.
+    object_id : (m,) int32 or None
+        The id of each pixel's first sample in the batch (``object_id`` kept).
+    object_id_set : (m,) bool or None
+        Which pixels had a sample with an id.
+    nonfinite : int
+        Samples whose radiance was not finite.
+    """
+
+    start: int
+    rgb: np.ndarray
+    alpha: np.ndarray
+    count: np.ndarray
+    aov: dict = field(default_factory=dict)
+    object_id: np.ndarray | None = None
+    object_id_set: np.ndarray | None = None
+    nonfinite: int = 0
+
+    @classmethod
+    def of_samples(
+        cls, pixel: np.ndarray, rgb: np.ndarray, alpha: np.ndarray, aovs: dict | None, keep
+    ) -> FilmPatch:
+        """The patch of a batch of samples (:meth:`Film.add` takes the same arguments),
+        keeping the AOVs named in ``keep``.
+
+        Examples
+        --------
+        >>> p = FilmPatch.of_samples(np.array([3, 3, 4]), np.ones((3, 3)), np.ones(3), None, ())
+        >>> p.start, p.count.tolist(), p.rgb[:, 0].tolist()
+        (3, [2, 1], [2.0, 1.0])
+        """
+        pixel = np.asarray(pixel, dtype=np.int64)
+        rgb = np.asarray(rgb, dtype=np.float64)
+        start = int(pixel.min()) if len(pixel) else 0
+        local = pixel - start
+        m = int(local.max()) + 1 if len(pixel) else 0
+        bad = ~np.all(np.isfinite(rgb), axis=1)
+        nonfinite = int(bad.sum())
+        if nonfinite:
+            rgb = np.where(bad[:, None], 0.0, rgb)
+        sums = np.stack([np.bincount(local, rgb[:, c], minlength=m) for c in range(3)], axis=1)
+        aovs = aovs or {}
+        aov = {}
+        for name in keep:
+            if name != "object_id" and name in aovs:
+                k = len(AOVS[name])
+                val = np.asarray(aovs[name], dtype=np.float64).reshape(len(pixel), k)
+                aov[name] = np.stack(
+                    [np.bincount(local, val[:, c], minlength=m) for c in range(k)], axis=1
+                ).reshape(m, k)
+        object_id = object_id_set = None
+        if "object_id" in keep and "object_id" in aovs:
+            ids = np.asarray(aovs["object_id"], dtype=np.int32)
+            # the first sample of each pixel in this batch
+            first = np.unique(local, return_index=True)[1]
+            object_id = np.full(m, -1, dtype=np.int32)
+            object_id_set = np.zeros(m, dtype=bool)
+            object_id[local[first]] = ids[first]
+            object_id_set[local[first]] = True
+        return cls(
+            start,
+            sums,
+            np.bincount(local, np.asarray(alpha, dtype=np.float64), minlength=m),
+            np.bincount(local, minlength=m).astype(np.int64),
+            aov,
+            object_id,
+            object_id_set,
+            nonfinite,
+        )
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of its arrays (what a chunk's result weighs on the wire)."""
+        arrays = [self.rgb, self.alpha, self.count, *self.aov.values()]
+        arrays += [a for a in (self.object_id, self.object_id_set) if a is not None]
+        return sum(a.nbytes for a in arrays)
 
 
 def read_exr(path) -> dict[str, np.ndarray]:

@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import time as _time
 from concurrent.futures import ThreadPoolExecutor
+from functools import partial
 
 import numpy as np
 
@@ -83,6 +84,7 @@ from render.lights import (
     SpotLight,
 )
 from render.numerics import dot
+from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
 from render.program import ProgramTable
 from render.sky import SunAndSky
 from render.volume import MAX_NESTING, is_closed, medium_of
@@ -91,11 +93,6 @@ __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
 
 #: ray-origin offset relative to the scene's bounding-box diagonal
 RAY_EPS = 1e-5
-#: samples per work item (each has its own random stream)
-CHUNK = 1 << 16
-#: fewest samples in one pass (the unit of the time budget and of the progress bar)
-PASS_SAMPLES = 1 << 19
-
 _LIGHT_KINDS = {
     ConstantEnvironment: kern.ENVIRONMENT,
     PointLight: kern.POINT,
@@ -692,36 +689,20 @@ class Integrator:
         threads : int
             Worker threads (each traces its own chunks).
         """
-        st = self.settings
-        if spp is None and time_budget is None:
-            time_budget = st.time
-        spp = st.spp if spp is None else int(spp)
-        seed = st.seed if seed is None else int(seed)
         film = Film(self.camera.width, self.camera.height, self.aovs)
         npix = film.pixel_count
-        # a pass holds at least PASS_SAMPLES samples (small images: several spp per pass);
-        # independent of the thread count, so the image is too
-        per_pass = max(1, st.spp_per_pass, -(-PASS_SAMPLES // npix))
-        if not time_budget:
-            per_pass = min(per_pass, spp)
-        passes = None if time_budget else -(-spp // per_pass)
+        # the passes and chunks (render.passes): the same in-process and on a cluster
+        plan = PassPlan.of(self.settings, npix, spp, time_budget, seed)
+        passes, time_budget = plan.passes, plan.time_budget
         bar = None
         if progress:
             from tqdm import tqdm
 
-            total = passes * -(-npix * per_pass // CHUNK) if passes else None
-            bar = tqdm(total=total, unit="chunk", desc="render", leave=False)
+            bar = tqdm(total=plan.chunk_count, unit="chunk", desc="render", leave=False)
         start = _time.perf_counter()
         self.embree_time = 0.0
         self.rays = 0
-
-        def work(args):
-            pass_index, k_spp, (a, b) = args
-            rng = np.random.Generator(
-                np.random.PCG64(np.random.SeedSequence([seed, pass_index, a]))
-            )
-            pixel = np.arange(a, b, dtype=np.int64) // k_spp
-            return pixel, self.trace(pixel, rng)
+        work = partial(render_chunk, self, plan.seed)
 
         pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
         done = 0
@@ -732,15 +713,13 @@ class Integrator:
                     break
                 if passes is None and k > 0 and _time.perf_counter() - start >= time_budget:
                     break
-                k_spp = per_pass if passes is None else min(per_pass, spp - done)
-                per = npix * k_spp
-                items = [(k, k_spp, (a, min(a + CHUNK, per))) for a in range(0, per, CHUNK)]
+                items = plan.chunks(k)
                 results = pool.map(work, items) if pool else map(work, items)
-                for pixel, (rgb, alpha, aovs) in results:
-                    film.add(pixel, rgb, alpha, aovs)
+                for patch in results:
+                    film.merge(patch)
                     if bar is not None:
                         bar.update(1)
-                done += k_spp
+                done += plan.pass_spp(k)
                 k += 1
         finally:
             if pool:

@@ -3,7 +3,9 @@
 Registered through the ``pwc.commands`` entry point (``render =
 "render.commands.render:register"``); ``pwc`` calls :func:`register` with its
 subparsers and then ``args.func(args)``.  Errors in the scene are printed as
-``file:line:col: message`` and exit with status 1; no traceback.
+``file:line:col: message`` and exit with status 1; no traceback.  With
+``--scheduler`` or ``--workers`` the chunks run on a Dask cluster
+(:mod:`render.distributed`); a cluster that cannot render exits with status 3.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from pathlib import Path
 
 from pwc.cli import add_profiles_option
 from pwc.files import OutputError, prepare_output
+from render.distributed import add_cluster_options
 
 __all__ = ["register", "run"]
 
@@ -23,13 +26,16 @@ _DESCRIPTION = """\
 Render a scene file with the Embree path tracer.  The scene (TOML) gives the camera,
 lights, objects with MDL material expressions as the Handbook prints them, and render
 settings; the options below override its [render] table.  Output: linear float RGBA
-OpenEXR with optional AOV layers, and an optional sRGB PNG preview."""
+OpenEXR with optional AOV layers, and an optional sRGB PNG preview.  With --scheduler or
+--workers the image's chunks run on a Dask cluster: the same image, bit for bit."""
 
 _EPILOG = """\
 examples:
   pwc render gallery/scenes/fig_12_06.toml -o out.exr --png out.png
   pwc render scene.toml -o out.exr --time 30 --aov albedo,normal --denoise
-  pwc render scene.toml -o out.exr --spp 256 --seed 7 --threads 2"""
+  pwc render scene.toml -o out.exr --spp 256 --seed 7 --threads 2
+  pwc render scene.toml -o out.exr --spp 1024 --workers 2
+  pwc render scene.toml -o out.exr --time 60 --scheduler tcp://scheduler-host:8786"""
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -62,7 +68,20 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, metavar="N", help="random seed (same seed, same image)")
     p.add_argument("--max-depth", type=int, metavar="N", help="longest path (-1: unlimited)")
     p.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"), help="image size")
-    p.add_argument("--threads", type=int, default=2, metavar="N", help="worker threads (default 2)")
+    p.add_argument(
+        "--threads",
+        type=int,
+        metavar="N",
+        help="threads: in-process (default 2), or per --workers process (default 1)",
+    )
+    add_cluster_options(p)
+    p.add_argument(
+        "--chunks-per-task",
+        type=int,
+        metavar="N",
+        help="on a cluster: chunks of 65536 samples in one task (default: one per 6 threads "
+        "of the cluster); the same image",
+    )
     p.add_argument("--half", action="store_true", help="write 16-bit half floats")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     add_profiles_option(p)
@@ -77,6 +96,7 @@ def _error(message: str, status: int) -> int:
 
 def run(args) -> int:
     """Execute ``pwc render`` with parsed arguments; returns the exit status."""
+    from render.distributed import ClusterError, cluster, render_on_cluster
     from render.film import AOVS
     from render.integrator import render
     from render.scene import SceneError, SceneReadError, load_scene
@@ -89,8 +109,12 @@ def run(args) -> int:
         return _error(f"--spp must be >= 1, got {args.spp}", EXIT_USAGE)
     if args.time is not None and not args.time > 0:
         return _error(f"--time must be > 0 seconds, got {args.time}", EXIT_USAGE)
-    if args.threads < 1:
+    if args.threads is not None and args.threads < 1:
         return _error(f"--threads must be >= 1, got {args.threads}", EXIT_USAGE)
+    if args.workers is not None and args.workers < 1:
+        return _error(f"--workers must be >= 1, got {args.workers}", EXIT_USAGE)
+    if args.chunks_per_task is not None and args.chunks_per_task < 1:
+        return _error(f"--chunks-per-task must be >= 1, got {args.chunks_per_task}", EXIT_USAGE)
     if not str(args.output).lower().endswith(".exr"):
         return _error(f"the output must be an .exr file, got {args.output!r}", EXIT_USAGE)
     if args.png and not str(args.png).lower().endswith(".png"):
@@ -123,14 +147,18 @@ def run(args) -> int:
             )
         if not args.quiet:
             _notice_first_compile()
-        film = render(
-            scene,
-            aovs=aovs,
-            # a bar redrawn with carriage returns only on a terminal, not into a log
-            progress=not args.quiet and sys.stderr.isatty(),
-            threads=args.threads,
-            denoise=args.denoise,
-        )
+        # a bar redrawn with carriage returns only on a terminal, not into a log
+        progress = not args.quiet and sys.stderr.isatty()
+        if args.scheduler or args.workers:
+            with cluster(args.scheduler, args.workers, args.threads or 1) as client:
+                film = render_on_cluster(scene, client, aovs=aovs, progress=progress,
+                                         denoise=args.denoise,
+                                         chunks_per_task=args.chunks_per_task)
+        else:
+            film = render(scene, aovs=aovs, progress=progress, threads=args.threads or 2,
+                          denoise=args.denoise)
+    except ClusterError as e:
+        return _error(str(e), EXIT_IO)
     except SceneReadError as e:
         print(str(e), file=sys.stderr)
         return EXIT_IO
@@ -149,15 +177,21 @@ def run(args) -> int:
         return _error(f"cannot write the output: {getattr(e, 'strerror', None) or e}", EXIT_IO)
     if not args.quiet:
         st = film.stats
-        share = st["embree_time_s"] / (args.threads * st["time_s"]) if st["time_s"] else 0.0
         bound = st.get("bound_objects") or []
         shaded = f"; shaded per hit in numpy: {', '.join(bound)}" if bound else ""
         wrote = f"wrote {Path(args.output)}" + (f" and {Path(args.png)}" if args.png else "")
+        if "workers" in st:
+            where = (f"{len(st['workers'])} workers, scene {st['scene_bytes'] / 1e6:.1f} MB "
+                     f"shipped to each, built in {st['build_s']:.1f} s")
+        else:
+            threads = args.threads or 2
+            share = st["embree_time_s"] / (threads * st["time_s"]) if st["time_s"] else 0.0
+            where = f"{share:.0%} of thread time in Embree"
         print(
             f"{wrote}: {film.width}x{film.height}, {st['spp']} spp in "
             f"{st['time_s']:.2f} s "
-            f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {share:.0%} of thread time in "
-            f"Embree, {st['triangles']} triangles{shaded})",
+            f"({st['samples_per_s'] / 1e6:.2f} M samples/s, {where}, "
+            f"{st['triangles']} triangles{shaded})",
             file=sys.stderr,
         )
     return EXIT_OK
