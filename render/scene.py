@@ -283,7 +283,14 @@ class Scene:
     path: str = "<scene>"
 
     def build(self, progress: bool = False) -> Geometry:
-        """Tessellate (dice displaced objects) and build the Embree scene."""
+        """Tessellate (dice displaced objects) and build the Embree scene.
+
+        Raises :class:`render.film.FilmTooLarge` first, before any dicing, when the image
+        would not fit in memory.
+        """
+        from render.film import check_film_memory
+
+        check_film_memory(self.camera.width, self.camera.height)
         return Geometry.build(self, progress=progress)
 
 
@@ -342,6 +349,11 @@ class Geometry:
             stats.append(st)
         if not parts:
             raise ValueError("the scene has no objects")
+        if not any(len(p[1]) for p in parts):
+            names = ", ".join(repr(st["name"]) for st in stats)
+            raise ValueError(f"nothing to trace: every object ({names}) has zero area (a "
+                             "displacement that collapses a surface to a line or a point "
+                             "leaves no triangles)")
         v_off = np.cumsum([0] + [len(p[0]) for p in parts])
         f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
         vertices = np.concatenate([p[0] for p in parts])
@@ -482,6 +494,14 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
     tv = _unit_rows(state.tangent_v @ obj.linear.T)
     st = {"diced": False, "triangles": len(new_faces)}
     return (verts, new_faces, state.uv, n, tu, tv), st
+
+
+def _triangle_area(obj: SceneObject) -> float:
+    """Total area of an undisplaced object's triangles, as the renderer builds them."""
+    (v, f, *_), _ = _object_triangles(obj, None, RenderSettings())
+    c = v[f]
+    return float(0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]),
+                                      axis=1).sum())
 
 
 # ------------------------------------------------------------------------------ parsing
@@ -1137,7 +1157,7 @@ class _Parser:
 
                 surface = UVSphere(self._num(t, "radius", sec, i, 0.25, positive=True))
             transform = make_transform(translate=center) if kind == "sphere" else np.eye(4)
-            return None, SceneObject(
+            obj = SceneObject(
                 surface,
                 emissive_material(intensity),
                 transform,
@@ -1145,6 +1165,14 @@ class _Parser:
                 (48, 24) if kind == "sphere" else None,
                 f"emissive(intensity: {intensity.tolist()})",
             )
+            if not _triangle_area(obj) > 0.0:
+                key = "size" if kind == "quad" else "radius"
+                raise self.error(
+                    f"lights[{i}]: this {kind} light has no area in double precision: its "
+                    f"{key} is so small that the area underflows to 0 or the corners round "
+                    f"to the same points (below ~1e-15 of its distance from the origin); "
+                    f"make it larger, or use a point light", sec, i, key)
+            return None, obj
         except SceneError:
             raise
         except ValueError as e:

@@ -84,7 +84,7 @@ def _error(message: str, status: int) -> int:
 
 def run(args) -> int:
     """Execute ``pwc render`` with parsed arguments; returns the exit status."""
-    from render.film import AOVS
+    from render.film import AOVS, check_film_memory
     from render.integrator import render
     from render.scene import SceneError, SceneReadError, load_scene
 
@@ -128,6 +128,8 @@ def run(args) -> int:
             scene.camera = dataclasses.replace(
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
+        # an image too large for memory is refused before the scene is diced
+        check_film_memory(scene.camera.width, scene.camera.height, aovs, args.denoise)
         if not args.quiet and args.path != "general":
             _notice_first_compile()
         film = render(
