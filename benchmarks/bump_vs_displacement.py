@@ -33,7 +33,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -42,10 +41,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from displacement.bake import bake, displaced_normal, read_normal_map, write_normal_map  # noqa: E402
+from render.displacement_method import apply  # noqa: E402
 from render.film import linear_to_srgb  # noqa: E402
 from render.integrator import Integrator  # noqa: E402
-from render.material import Varying, material, material_geometry  # noqa: E402
+from render.material import material  # noqa: E402
 from render.materials import MATERIALS  # noqa: E402
 from render.scene import load_scene  # noqa: E402
 
@@ -82,44 +81,26 @@ def timed_render(scene, spp: int, seed: int, repeats: int = 1) -> dict:
             "rays": film.stats["rays"]}
 
 
+def with_method(scene, method: str, map_size: int = 512, bake_times: list | None = None):
+    """A copy of ``scene`` whose displaced objects are modelled by ``method``
+    (:mod:`render.displacement_method`: ``"bump"`` or a 16-bit ``"normal_map"``)."""
+    objects = []
+    for o in scene.objects:
+        if o.displacement is not None:
+            t0 = time.perf_counter()
+            o = dataclasses.replace(o, material=apply(o.material, o.surface, method, map_size, 16),
+                                    displacement_method=method)
+            if bake_times is not None:
+                bake_times.append(time.perf_counter() - t0)
+        objects.append(o)
+    return dataclasses.replace(scene, objects=objects)
+
+
 def with_materials(scene, make):
     """A copy of ``scene`` whose displaced objects get ``make(obj)`` as their material."""
     objects = [dataclasses.replace(o, material=make(o)) if o.displacement is not None else o
                for o in scene.objects]
     return dataclasses.replace(scene, objects=objects)
-
-
-def flat(obj) -> material:
-    """The object's material without its displacement (same surface)."""
-    m = obj.material
-    return material(thin_walled=m.thin_walled, surface=m.surface, backface=m.backface,
-                    ior=m.ior, volume=m.volume)
-
-
-def baked_bump(map_size: int, folder: Path, bake_times: list):
-    """``obj -> normal_map_bump(...)`` with the object's displacement baked to a 16-bit PNG."""
-    def make(obj):
-        t0 = time.perf_counter()
-        maps = bake(obj.displacement, obj.surface, size=map_size)
-        path = write_normal_map(folder / f"{obj.name}_normal.png", maps.normal, bits=16)
-        texture = read_normal_map(path)
-        bake_times.append(time.perf_counter() - t0)
-        return MATERIALS["normal_map_bump"](surface_material=flat(obj), texture=texture)
-    return make
-
-
-def procedural_bump(obj) -> material:
-    """The displaced surface's exact normal at each shading point (bump without a map)."""
-    field, surface = obj.displacement, obj.surface
-    step = 1e-4
-
-    def normal(state):
-        n, _, _ = displaced_normal(field, surface, state.uv, step)
-        return n
-
-    m = flat(obj)
-    return material(surface=m.surface,
-                    geometry=material_geometry(normal=Varying(normal, "displaced_normal")))
 
 
 def shading_only(obj) -> material:
@@ -132,32 +113,31 @@ def run(args) -> list[dict]:
                                               "spp": args.spp})
     timed_render(scene, 1, 0)  # warm-up: imports, Embree, caches (not timed)
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        bake_times: list[float] = []
-        variants = [
-            ("displaced", scene, 1),
-            ("bump, baked normal map", with_materials(
-                scene, baked_bump(args.map_size, Path(tmp), bake_times)), 2),
-            ("bump, procedural normal", with_materials(scene, procedural_bump), 2),
-            ("shading only (waves_as_grayscale)", with_materials(scene, shading_only), 2),
-            ("displaced, another seed", scene, 2),
-        ]
-        reference = None
-        for name, sc, seed in variants:
-            r = timed_render(sc, args.spp, seed, args.repeats)
-            r["name"] = name
-            if reference is None:
-                reference = r
-            else:
-                r["rmse"], r["flip"] = errors(r["image"], reference["image"])
-            r["ratio"] = r["total_s"] / reference["total_s"]
-            if name.startswith("bump, baked"):
-                r["bake_s"] = sum(bake_times)
-            rows.append(r)
-            print(f"{name}: {r['total_s']:.2f} s ({r['ratio']:.0%} of displaced), "
-                  f"{r['triangles']} triangles"
-                  + (f", RMSE {r['rmse']:.4f}, FLIP {r['flip']:.4f}" if "rmse" in r else ""),
-                  flush=True)
+    bake_times: list[float] = []
+    variants = [
+        ("displaced", scene, 1),
+        ("bump, baked normal map", with_method(scene, "normal_map", args.map_size,
+                                               bake_times), 2),
+        ("bump, procedural normal", with_method(scene, "bump"), 2),
+        ("shading only (waves_as_grayscale)", with_materials(scene, shading_only), 2),
+        ("displaced, another seed", scene, 2),
+    ]
+    reference = None
+    for name, sc, seed in variants:
+        r = timed_render(sc, args.spp, seed, args.repeats)
+        r["name"] = name
+        if reference is None:
+            reference = r
+        else:
+            r["rmse"], r["flip"] = errors(r["image"], reference["image"])
+        r["ratio"] = r["total_s"] / reference["total_s"]
+        if name.startswith("bump, baked"):
+            r["bake_s"] = sum(bake_times)
+        rows.append(r)
+        print(f"{name}: {r['total_s']:.2f} s ({r['ratio']:.0%} of displaced), "
+              f"{r['triangles']} triangles"
+              + (f", RMSE {r['rmse']:.4f}, FLIP {r['flip']:.4f}" if "rmse" in r else ""),
+              flush=True)
     return rows
 
 

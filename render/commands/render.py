@@ -102,7 +102,8 @@ def run(args) -> int:
         return _error(f"the output must be an .exr file, got {args.output!r}", EXIT_USAGE)
     if args.png and not str(args.png).lower().endswith(".png"):
         return _error(f"--png must name a .png file, got {args.png!r}", EXIT_USAGE)
-    if args.denoise:
+    denoise = args.denoise
+    if denoise:
         try:
             import pyoidn  # noqa: F401
         except ImportError:
@@ -128,8 +129,11 @@ def run(args) -> int:
             scene.camera = dataclasses.replace(
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
+        denoise = denoise or scene.settings.denoise  # --denoise, or denoise = true
+        if denoise:
+            import pyoidn  # noqa: F401 - raises ImportError (reported below) when missing
         # an image too large for memory is refused before the scene is diced
-        check_film_memory(scene.camera.width, scene.camera.height, aovs, args.denoise)
+        check_film_memory(scene.camera.width, scene.camera.height, aovs, denoise)
         if not args.quiet and args.path != "general":
             _notice_first_compile()
         film = render(
@@ -138,7 +142,7 @@ def run(args) -> int:
             # a bar redrawn with carriage returns only on a terminal, not into a log
             progress=not args.quiet and sys.stderr.isatty(),
             threads=args.threads,
-            denoise=args.denoise,
+            denoise=denoise,
             path=args.path,
         )
     except SceneReadError as e:

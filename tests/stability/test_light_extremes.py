@@ -29,7 +29,10 @@ max_depth = 2
 
 [[objects]]
 name = "floor"
-surface = {{ type = "plane", size = [4.0, 4.0], origin = [-2.0, 0.0, 2.0], axis_u = [1.0, 0.0, 0.0], axis_v = [0.0, 0.0, -1.0] }}
+surface = "square"
+scale = 4.0
+rotate = [-90.0, 0.0, 0.0]
+translate = [-2.0, 0.0, 2.0]
 material = "diffuse(tint: color(1.0))"
 
 [[lights]]
