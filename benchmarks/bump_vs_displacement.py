@@ -10,12 +10,14 @@ float2(0.075, 0.075))``).  The same look is rendered, at the same samples per pi
 * **displaced**: the Handbook's material; the renderer dices both objects for the camera
   (``displacement.dice``) and traces the displaced triangles;
 * **bump, baked normal map**: the displacement baked per object into a 16-bit
-  tangent-space normal map (``displacement.bake``, ``--map-size`` texels square), read
-  back and applied with the Handbook's ``normal_map_bump`` (Listing 13.19) over the
-  same diffuse surface; the objects stay flat (the base mesh);
+  tangent-space normal map (``displacement.bake``, ``--map-size`` texels square, quantized
+  as the file stores it) and applied with the Handbook's ``normal_map_bump`` (Listing
+  13.19) over the same surface; the objects stay flat (the base mesh).  This is the scene
+  files' ``displacement_method = "normal_map"`` (:mod:`render.displacement_method`);
 * **bump, procedural normal**: the exact normal of the displaced surface computed at
   every shading point (``displacement.bake.displaced_normal``), no map: what bump can
-  do at best, so the map's own error is seen apart from bump's;
+  do at best, so the map's own error is seen apart from bump's (``displacement_method =
+  "bump"``);
 * **shading only**: ``waves_as_grayscale(frequency: float2(4.0, 4.0))`` (Listing 12.4),
   the version that the Handbook timed at 57 % of ``waves_as_displacement`` (section
   12.2): a different look, timed for comparison;
@@ -160,7 +162,7 @@ def markdown(rows: list[dict], args) -> str:
     scene = Path(args.scene).resolve()
     scene = scene.relative_to(ROOT) if scene.is_relative_to(ROOT) else scene
     head = (f"{w} x {h} px, {args.spp} spp, normal maps {args.map_size} x {args.map_size} "
-            f"16-bit PNG, fastest of {args.repeats} runs, scene `{scene}`")
+            f"16-bit, fastest of {args.repeats} runs, scene `{scene}`")
     return head + "\n\n" + "\n".join(lines) + "\n"
 
 
