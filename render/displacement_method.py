@@ -63,6 +63,7 @@ def apply(material, surface, method: str, size: int = 512, bits=16):
     """
     from displacement.bake import bake, displaced_normal, quantize
     from displacement.bump import encode_normal_colors
+    from displacement.dice import is_mesh_surface
     from displacement.textures import Texture
     from render.library.resources import with_filter
     from render.material import Varying
@@ -74,7 +75,7 @@ def apply(material, surface, method: str, size: int = 512, bits=16):
     field = material.geometry.displacement
     if method == "displacement" or field is None:
         return material
-    if not hasattr(surface, "state_at_uv"):
+    if is_mesh_surface(surface):
         raise ValueError(f"displacement_method {method!r} needs a parametric surface (a mesh "
                          "has no uv chart to take the field's derivatives in); use "
                          "'displacement'")

@@ -166,6 +166,9 @@ class RenderSettings:
     denoise : bool
         Denoise the image (Open Image Denoise) after rendering (``pwc render`` honours
         it, as ``--denoise``).
+    dice_invisible : bool
+        Dice every displaced object.  By default (False) a displacement the camera
+        cannot see is not diced (:meth:`Scene.build`).
     """
 
     width: int = 256
@@ -182,6 +185,7 @@ class RenderSettings:
     curve_tolerance: float = 1e-4
     texture_filter: str = "bilinear"
     denoise: bool = False
+    dice_invisible: bool = False
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -217,8 +221,9 @@ class RenderSettings:
         if self.texture_filter not in FILTERS:
             raise ValueError(f"texture_filter must be one of {', '.join(map(repr, FILTERS))}, "
                              f"got {self.texture_filter!r}")
-        if not isinstance(self.denoise, bool):
-            raise ValueError(f"denoise must be true or false, got {self.denoise!r}")
+        for name in ("denoise", "dice_invisible"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         return self
 
 
@@ -250,6 +255,9 @@ class SceneObject:
     original_displacement : Field or None
         The displacement the material was written with, when ``displacement_method``
         modelled it as bump or a normal map (``material`` then has none).
+    not_diced : str or None
+        Why :meth:`Scene.build` did not dice this displaced object (the camera cannot see
+        its displacement), or None.
     """
 
     surface: Any
@@ -262,6 +270,7 @@ class SceneObject:
     dicing_tolerance: float | None = None
     displacement_method: str = "displacement"
     original_displacement: Any = None
+    not_diced: str | None = None
 
     def __post_init__(self) -> None:
         from displacement.dice.evaluator import check_transform
@@ -334,7 +343,42 @@ class Scene:
         from render.film import check_film_memory
 
         check_film_memory(self.camera.width, self.camera.height)
+        if not self.settings.dice_invisible:
+            self.objects = [_model_what_is_seen(o, self.camera, self.settings)
+                            for o in self.objects]
         return Geometry.build(self, progress=progress)
+
+
+def _model_what_is_seen(obj: SceneObject, camera: Camera, settings: RenderSettings):
+    """``obj``, or, where the camera cannot see its displacement, a copy that is not diced:
+    a displacement of zero length here is dropped; one under the dicing tolerance, or on
+    an object out of view, is shaded as bump from the same field (its normals still
+    show).  Mesh surfaces, and objects already modelled otherwise, are kept."""
+    import dataclasses
+
+    from displacement.dice import displacement_on_screen, is_mesh_surface
+    from render.displacement_method import apply, without_displacement
+
+    field_ = obj.displacement
+    if field_ is None or obj.displacement_method != "displacement" or is_mesh_surface(
+            obj.surface):
+        return obj
+    tolerance = obj.dicing_tolerance or settings.dicing_tolerance
+    pixels, in_view = displacement_on_screen(obj.surface, field_, camera, obj.transform)
+    if pixels == 0.0:
+        why, material, method = "its displacement is zero", without_displacement(
+            obj.material), "none"
+    elif in_view and pixels > tolerance:
+        return obj
+    else:
+        why = ("out of view" if not in_view else
+               f"its displacement is {pixels:.2g} px here, under the {tolerance:g} px "
+               "tolerance")
+        material, method = apply(obj.material, obj.surface, "bump"), "bump"
+    return dataclasses.replace(obj, material=material, displacement_method=method,
+                               original_displacement=field_,
+                               not_diced=f"{why}: shaded as {method}" if method == "bump"
+                               else why)
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -536,6 +580,8 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
     tu = _unit_rows(state.tangent_u @ obj.linear.T)
     tv = _unit_rows(state.tangent_v @ obj.linear.T)
     st = {"diced": False, "triangles": len(new_faces)}
+    if obj.not_diced:
+        st["not_diced"] = obj.not_diced
     return (verts, new_faces, state.uv, n, tu, tv), st
 
 
@@ -591,9 +637,9 @@ def modelling_summary(scene: Scene, geometry_stats: list) -> list[dict]:
                         f"{obj.displacement_method.replace('_', ' ')})")
         else:
             geometry = f"base mesh: {st['triangles']:,} triangles (not displaced)"
-        if st.get("skipped_dicing"):
+        if st.get("not_diced"):
             geometry = (f"base mesh: {st['triangles']:,} triangles (not diced: "
-                        f"{st['skipped_dicing']})")
+                        f"{st['not_diced']})")
         dfs = _df_names(getattr(m.surface, "scattering", None))
         if not m.backface.is_default:
             dfs |= _df_names(m.backface.scattering)
@@ -985,6 +1031,7 @@ class _Parser:
             "curve_tolerance",
             "texture_filter",
             "denoise",
+            "dice_invisible",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -1015,6 +1062,7 @@ class _Parser:
             "curve_tolerance",
             "texture_filter",
             "denoise",
+            "dice_invisible",
         ):
             if key in t:
                 setattr(s, key, t[key])

@@ -18,6 +18,7 @@ BENCHMARKS = {
     "glossy_kernels.py": ["--quick"],
     "embree_calls.py": ["--quick"],
     "gallery_speed.py": ["--quick"],
+    "invisible_displacement.py": ["--quick"],
 }
 
 

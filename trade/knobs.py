@@ -124,6 +124,8 @@ def knobs_for(scene, loads: dict, size: str = "full", denoiser: bool = True) -> 
     denoiser : bool
         Whether Open Image Denoise is available (offer denoised options).
     """
+    from displacement.dice import is_mesh_surface
+
     st = scene.settings
     knobs = []
     samples = Knob("samples", "samples", baseline=f"spp {st.spp}" +
@@ -148,7 +150,7 @@ def knobs_for(scene, loads: dict, size: str = "full", denoiser: bool = True) -> 
             knobs.append(Knob(f"dicing_rate ({obj.name})", "dicing", [
                 Option(f"{obj.name}: rate {v:g} px", _obj(i, dicing_rate=v))
                 for v in DICING_RATE[size] if v != rate], f"{rate:g} px"))
-        if hasattr(obj.surface, "state_at_uv"):
+        if not is_mesh_surface(obj.surface):
             method = Knob(f"displacement_method ({obj.name})", "displacement",
                           baseline=obj.displacement_method)
             method.options.append(Option(f"{obj.name}: bump", _obj(
@@ -186,11 +188,13 @@ def knobs_for(scene, loads: dict, size: str = "full", denoiser: bool = True) -> 
 def reference_patch(scene, spp: int) -> dict:
     """Settings of the converged reference: ``spp`` samples, no denoising, paths at least
     :data:`REFERENCE_DEPTH` long (or unlimited as written), exact curves, bilinear
-    textures, true displacement diced finer than any option."""
+    textures, true displacement diced finer than any option, even where the camera
+    cannot see it."""
     st = scene.settings
     depth = -1 if st.max_depth == -1 else max(st.max_depth, REFERENCE_DEPTH)
     patch = {"render": {"spp": int(spp), "denoise": False, "max_depth": depth,
-                        "curves": "exact", "texture_filter": "bilinear", **REFERENCE_DICING},
+                        "curves": "exact", "texture_filter": "bilinear",
+                        "dice_invisible": True, **REFERENCE_DICING},
              "objects": {}}
     for i, obj in enumerate(scene.objects):
         if (obj.original_displacement or obj.displacement) is not None:

@@ -98,13 +98,13 @@ def geometric_error(scene, geometry, samples: int = 20_000, seed: int = 0) -> fl
     """
     from types import SimpleNamespace
 
-    from displacement.dice import screen_error
+    from displacement.dice import is_mesh_surface, screen_error
 
     worst = None
     rng = np.random.default_rng(seed)
     for k, obj in enumerate(scene.objects):
         field = obj.original_displacement or obj.displacement
-        if field is None or not hasattr(obj.surface, "state_at_uv"):
+        if field is None or is_mesh_surface(obj.surface):
             continue
         first, last = geometry.face_offset[k], geometry.face_offset[k + 1]
         if last == first:

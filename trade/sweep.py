@@ -160,12 +160,14 @@ def reference_image(text: str, path: Path, out: Path, spp: int, given: Path | No
     return image, {**info, "reused": False, "patch": patch}
 
 
-def modelled_objects(scene, geometry_stats) -> list[dict]:
-    """Per object: how it was modelled in the scene as written (see
-    :func:`render.scene.modelling_summary`)."""
-    from render.scene import modelling_summary
+def modelled_objects(text: str, path: Path, resolution) -> list[dict]:
+    """Per object: how the scene as written is modelled at ``resolution``
+    (:func:`render.scene.modelling_summary` of the built scene)."""
+    from render.scene import modelling_summary, parse_scene, patch_scene_text
 
-    return modelling_summary(scene, geometry_stats)
+    scene = parse_scene(patch_scene_text(text, _resolution_patch(resolution)["render"]),
+                        str(path), base_dir=path.parent)
+    return modelling_summary(scene, scene.build().stats)
 
 
 def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: float = 0.05,
@@ -299,8 +301,8 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     rec_patch = merge(base if resolution else {}, recommended.patch if recommended else {})
     recommended_text = patch_scene_text(text, rec_patch["render"], rec_patch["objects"])
     return Trade(scene_path, text, names, res, metric, target, ref_info, runs, skipped,
-                 recommended, recommended_text, modelled_objects(scene, baseline.record[
-                     "objects"]), {k: sorted(v) for k, v in loads.items()}, budget, size,
+                 recommended, recommended_text, modelled_objects(text, scene_path, res),
+                 {k: sorted(v) for k, v in loads.items()}, budget, size,
                  time.perf_counter() - started)
 
 

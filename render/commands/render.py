@@ -173,7 +173,32 @@ def run(args) -> int:
             f"Embree, {st['triangles']} triangles; {path} path)",
             file=sys.stderr,
         )
+        for line in modelling_lines(scene, st["geometry"], aovs):
+            print(line, file=sys.stderr)
     return EXIT_OK
+
+
+def modelling_lines(scene, geometry_stats, aovs) -> list[str]:
+    """What was modelled, one line per object, then the lights, volumes and AOVs (the
+    render summary of ``pwc render``)."""
+    from render.scene import modelling_summary
+
+    summary = modelling_summary(scene, geometry_stats)
+    lines = []
+    for m in summary:
+        notes = [m["displacement"].replace("_", " ") if m["displacement"] not in (
+            "none", "displacement") else "",
+            "bumped normal" if m["normal"].startswith("evaluated") else "",
+            "emits" if m["emits"] else "", "volume" if m["volume"] else "",
+            "thin-walled" if m["thin_walled"] else "", "cutout" if m["cutout"] else ""]
+        lines.append(f"  {m['name']}: {m['geometry']}; "
+                     + ", ".join([x for x in notes if x] + m["dfs"]))
+    lights = [type(light).__name__ for light in scene.lights]
+    lights += [f"area ({m['name']})" for m in summary if m["emits"]]
+    volumes = "on" if any(m["volume"] for m in summary) else "none"
+    lines.append(f"  lights: {', '.join(lights) or 'none'}; volumes: {volumes}; "
+                 f"AOVs: {', '.join(aovs) or 'none'}")
+    return lines
 
 
 def _scene_file(arg: str) -> Path:

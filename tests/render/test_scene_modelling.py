@@ -185,3 +185,55 @@ def test_the_summary_says_what_each_object_is_made_of():
     assert summary["ornament"]["dfs"] == ["diffuse_reflection_bsdf"]
     assert summary["light_left"]["emits"] and summary["light_left"]["dfs"] == ["diffuse_edf"]
     assert not any(m["volume"] for m in summary.values())
+
+
+# -- model only what the camera can see ----------------------------------------------------
+def _waves_square(distance: float, translate=(0.0, 0.0, 0.0), **render):
+    text = (bundled_scenes() / "fig_14_28.toml").read_text()
+    text = text.replace('material = """tee_displacement()"""',
+                        f'material = "waves_as_displacement(frequency: float2(8.0), '
+                        f'distance: float2({distance}))"')
+    text = patch_scene_text(text, {"resolution": [64, 48], **render},
+                            {1: {"translate": list(translate)}})
+    return parse_scene(text, "s.toml")
+
+
+def test_a_displacement_under_the_tolerance_is_shaded_as_bump_not_diced():
+    scene = _waves_square(1e-5)  # ~0.005 px on screen
+    stats = scene.build().stats[1]
+    assert not stats["diced"] and stats["triangles"] == 2
+    assert "under the 0.5 px tolerance: shaded as bump" in stats["not_diced"]
+    obj = scene.objects[1]
+    assert obj.displacement_method == "bump" and obj.material.geometry.normal is not None
+    summary = modelling_summary(scene, scene.build().stats)[1]
+    assert summary["geometry"].startswith("base mesh: 2 triangles (not diced: its "
+                                          "displacement is")
+    # asked to, it dices
+    diced = _waves_square(1e-5, dice_invisible=True)
+    assert diced.build().stats[1]["diced"]
+
+
+def test_a_visible_displacement_is_diced_and_a_zero_one_dropped():
+    assert _waves_square(0.05).build().stats[1]["diced"]
+    zero = _waves_square(0.0)
+    stats = zero.build().stats[1]
+    assert stats["not_diced"] == "its displacement is zero" and stats["triangles"] == 2
+    assert zero.objects[1].material.geometry.normal is None  # nothing to bump either
+
+
+def test_a_displaced_object_out_of_view_is_not_diced():
+    scene = _waves_square(0.05, translate=(40.0, 0.0, 0.0))
+    stats = scene.build().stats[1]
+    assert stats["not_diced"] == "out of view: shaded as bump" and stats["triangles"] == 2
+
+
+def test_not_dicing_an_invisible_displacement_changes_the_image_by_noise_only():
+    from render.integrator import render
+    from trade.metrics import image_errors
+
+    culled = render(_waves_square(1e-4, spp=16), progress=False)
+    diced = render(_waves_square(1e-4, spp=16, dice_invisible=True), progress=False)
+    assert not culled.stats["geometry"][1]["diced"] and diced.stats["geometry"][1]["diced"]
+    again = render(_waves_square(1e-4, spp=16, seed=7, dice_invisible=True), progress=False)
+    noise = image_errors(again.rgb(), diced.rgb())["rmse"]
+    assert image_errors(culled.rgb(), diced.rgb())["rmse"] < 0.25 * noise
