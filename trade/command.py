@@ -75,6 +75,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                        f"{k}: {v}" for k, v in METRICS.items()) + " (default: flip)")
     p.add_argument("--target-error", type=float, default=0.05, metavar="E",
                    help="the largest acceptable error of the recommendation (default 0.05)")
+    p.add_argument("--cost", choices=("wall", "cpu"), default="wall",
+                   help="what cheapest means: wall-clock seconds (default), or the "
+                        "process's CPU seconds, steadier where other programs share the "
+                        "machine")
     p.add_argument("--budget", type=float, metavar="SECONDS",
                    help="stop starting runs after this long (the reference not counted)")
     p.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"),
@@ -110,6 +114,8 @@ def _command_line(args) -> str:
     if args.knobs:
         words += ["--knobs", ",".join(sorted(args.knobs))]
     words += ["--metric", args.metric, "--target-error", f"{args.target_error:g}"]
+    if args.cost != "wall":
+        words += ["--cost", args.cost]
     for flag, value in (("--budget", args.budget), ("--reference-spp", args.reference_spp),
                         ("--reference", args.reference)):
         if value is not None:
@@ -161,7 +167,7 @@ def run(args) -> int:
             resolution = ci_resolution(st.width, st.height)
         with search_paths(profile_dirs=[scene_path.parent, *args.profiles]):
             trade = run_trade(
-                scene_path, out, metric=args.metric, target=args.target_error,
+                scene_path, out, metric=args.metric, target=args.target_error, cost=args.cost,
                 knobs=args.knobs, budget=args.budget, size="ci" if args.ci else "full",
                 resolution=resolution, reference_spp=args.reference_spp,
                 reference=reference, fresh_reference=args.fresh_reference,
@@ -183,7 +189,7 @@ def run(args) -> int:
         log(f"no run met {trade.metric} <= {trade.target:g}; see {files['html']}")
     else:
         log(f"recommended: {rec.label}: {trade.metric} {rec.error(trade.metric):.4g}, "
-            f"{base.record['wall_s'] / rec.record['wall_s']:.2f}x the speed of the scene as "
+            f"{base.cost(args.cost) / rec.cost(args.cost):.2f}x the speed of the scene as "
             f"written -> {files['scene']}")
     log(f"wrote {files['html']} and {files['markdown']} ({len(trade.runs)} runs)")
     return EXIT_OK

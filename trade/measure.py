@@ -81,7 +81,8 @@ def measure(text: str, path: str | Path, threads: int = 2,
     Returns
     -------
     record : dict
-        ``wall_s`` (read + build + render + denoise), ``render_s``, ``build_s``,
+        ``wall_s`` (read + build + render + denoise) and ``cpu_s`` (the CPU time of all
+        the process's threads over it), ``render_s``, ``build_s``,
         ``peak_mb``, ``memory_method``, ``triangles``, ``rays``, ``spp``, ``path``
         (compiled or general), ``objects`` (per object: triangles, diced, dicer error).
     image : (h, w, 3) float64
@@ -92,15 +93,16 @@ def measure(text: str, path: str | Path, threads: int = 2,
 
     path = Path(path)
     with PeakMemory() as memory:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         scene = parse_scene(text, str(path), overrides={"seed": seed},
                             base_dir=path.parent)  # an override of None keeps the scene's
         film = render(scene, progress=False, threads=threads, denoise=scene.settings.denoise)
         image = film.rgb()
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     st = film.stats
     record = {
         "wall_s": wall,
+        "cpu_s": cpu,
         "render_s": st["time_s"],
         "build_s": st["build_s"],
         "peak_mb": memory.peak_bytes / 2**20,

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from trade.knobs import describe
 from trade.metrics import METRICS
+from trade.sweep import COSTS
 
 __all__ = ["write_report"]
 
@@ -114,15 +115,17 @@ def plot(trade, path: Path) -> None:
     runs = trade.runs
     metric = trade.metric
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.6), constrained_layout=True)
-    for ax, key, xlabel in ((axes[0], "wall_s", "wall time (s): read, dice, trace, denoise"),
+    cost = COSTS[trade.cost]
+    what = "wall time" if trade.cost == "wall" else "CPU time"
+    for ax, key, xlabel in ((axes[0], cost, f"{what} (s): read, dice, trace, denoise"),
                             (axes[1], "peak_mb", "peak memory above the start (MB)")):
         for family in dict.fromkeys(r.family for r in runs):
             pts = [r for r in runs if r.family == family]
             ax.scatter([r.record[key] for r in pts], [max(r.error(metric), 1e-6) for r in pts],
                        s=22, color=FAMILY_COLORS.get(family, "tab:olive"), label=family,
                        zorder=3)
-        front = sorted((r for r in runs if r.pareto), key=lambda r: r.record["wall_s"])
-        if key == "wall_s" and front:
+        front = sorted((r for r in runs if r.pareto), key=lambda r: r.record[cost])
+        if key == cost and front:
             ax.step([r.record[key] for r in front], [max(r.error(metric), 1e-6) for r in front],
                     where="post", color="tab:red", lw=1.2, alpha=0.7, label="Pareto front",
                     zorder=2)
@@ -154,7 +157,7 @@ def _f(v, fmt=".3g") -> str:
     return "—" if v is None else format(v, fmt)
 
 
-def _blocks(trade, command: str) -> list:
+def _blocks(trade, out: Path, command: str) -> list:
     runs, metric, names = trade.runs, trade.metric, trade.names
     base = runs[0]
     rec = trade.recommended
@@ -182,13 +185,15 @@ def _blocks(trade, command: str) -> list:
                        f"target, or the samples (the reference settings meet any target). "
                        f"`recommended.toml` is the scene as written."))
     else:
-        speed = base.record["wall_s"] / rec.record["wall_s"]
+        cost = COSTS[trade.cost]
+        speed = base.record[cost] / rec.record[cost]
         b.append(("p", f"**{rec.label}**: {describe(rec.patch, names)}."))
         b.append(("ul", [
             f"{metric} {rec.error(metric):.4g} (target {trade.target:g}); the scene as "
             f"written: {base.error(metric):.4g}",
-            f"{rec.record['wall_s']:.3g} s against {base.record['wall_s']:.3g} s as written: "
-            f"**{speed:.2f}x** {'faster' if speed >= 1 else 'slower'}",
+            f"{rec.record[cost]:.3g} {trade.cost} s against {base.record[cost]:.3g} s as "
+            f"written: **{speed:.2f}x** {'faster' if speed >= 1 else 'slower'} (wall "
+            f"{rec.record['wall_s']:.3g} s against {base.record['wall_s']:.3g} s)",
             f"peak memory {rec.record['peak_mb']:.0f} MB (as written "
             f"{base.record['peak_mb']:.0f} MB), {rec.record['triangles']:,} triangles "
             f"(as written {base.record['triangles']:,})",
@@ -214,18 +219,21 @@ def _blocks(trade, command: str) -> list:
     b.append(("h", 2, "Every run"))
     b.append(("p", "Wall time covers reading the scene (materials, profiles, textures, "
                    "baked maps), dicing and building the Embree scene, tracing and "
-                   "denoising; peak memory is the resident set above the process's at the "
-                   "run's start. Geometric error: the largest screen distance (px) between "
-                   "the traced triangles and the true displaced surface. All runs use "
-                   "the scene's seed (so each is the image its scene file renders), the "
-                   "reference another."))
-    head = ["#", "run", "knob", "wall s", "speed-up", "peak MB", "triangles", "rays (M)",
-            "RMSE", "rel RMSE", "FLIP", "rel mean", "geom px", "meets", "Pareto"]
+                   "denoising; CPU time is the process's (both threads) over the same "
+                   "span, which other programs' load changes much less; speed-ups and the "
+                   f"Pareto front are in **{trade.cost}** time. Peak memory is the resident "
+                   "set above the process's at the run's start. Geometric error: the "
+                   "largest screen distance (px) between the traced triangles and the true "
+                   "displaced surface. All runs use the scene's seed (so each is the image "
+                   "its scene file renders), the reference another."))
+    head = ["#", "run", "knob", "wall s", "CPU s", "speed-up", "peak MB", "triangles",
+            "rays (M)", "RMSE", "rel RMSE", "FLIP", "rel mean", "geom px", "meets", "Pareto"]
     rows = []
     for r in runs:
         e = r.errors
         rows.append([str(r.index), r.label, r.family, f"{r.record['wall_s']:.3g}",
-                     f"{base.record['wall_s'] / r.record['wall_s']:.2f}x",
+                     f"{r.record['cpu_s']:.3g}",
+                     f"{base.cost(trade.cost) / r.cost(trade.cost):.2f}x",
                      f"{r.record['peak_mb']:.0f}", f"{r.record['triangles']:,}",
                      f"{r.record['rays'] / 1e6:.2f}", f"{e['rmse']:.3g}",
                      f"{e['rel_rmse']:.3g}", f"{e['flip']:.3g}", f"{e['rel_mean']:.2g}",
@@ -236,8 +244,8 @@ def _blocks(trade, command: str) -> list:
         b.append(("p", f"Not run (past the {trade.budget:g} s budget): "
                        + "; ".join(trade.skipped) + "."))
     b.append(("h", 2, "Images"))
-    images = [("images/reference.png", "reference")] if (trade.out / "images" /
-                                                          "reference.png").is_file() else []
+    images = ([("images/reference.png", "reference")]
+              if (out / "images" / "reference.png").is_file() else [])
     images.append((base.image, "the scene as written"))
     if rec is not None and rec is not base:
         images.append((rec.image, f"recommended: {rec.label}"))
@@ -250,18 +258,17 @@ def _blocks(trade, command: str) -> list:
 def write_report(trade, out: Path, command: str = "") -> dict[str, Path]:
     """Write the report files into ``out``; returns them by name."""
     out = Path(out)
-    trade.out = out
     files = {"plot": out / "error_vs_time.png", "markdown": out / "report.md",
              "html": out / "report.html", "json": out / "runs.json",
              "scene": out / "recommended.toml"}
     plot(trade, files["plot"])
-    blocks = _blocks(trade, command or f"pwc trade {trade.scene_path} -o {out}")
+    blocks = _blocks(trade, out, command or f"pwc trade {trade.scene_path} -o {out}")
     title = f"Speed/accuracy trade: {trade.scene_path.name}"
     files["markdown"].write_text(_md(blocks), encoding="utf-8")
     files["html"].write_text(_html(blocks, title), encoding="utf-8")
     files["json"].write_text(json.dumps({
         "scene": str(trade.scene_path), "resolution": list(trade.resolution),
-        "metric": trade.metric, "target": trade.target,
+        "metric": trade.metric, "target": trade.target, "cost": trade.cost,
         "reference": {k: v for k, v in trade.reference.items() if k != "patch"},
         "recommended": trade.recommended.index if trade.recommended else None,
         "modelled": trade.modelled, "loads": trade.loads, "skipped": trade.skipped,
