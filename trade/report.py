@@ -111,6 +111,7 @@ def plot(trade, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     runs = trade.runs
     metric = trade.metric
@@ -142,6 +143,7 @@ def plot(trade, path: Path) -> None:
                        color="gold", edgecolors="k", zorder=5, label="recommended")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # no crowded labels
         ax.set_xlabel(xlabel)
         ax.set_ylabel(f"{METRICS[metric]} vs reference")
         ax.grid(True, which="both", alpha=0.25)
@@ -210,9 +212,9 @@ def _blocks(trade, out: Path, command: str) -> list:
                 ", ".join(m["dfs"]), "yes" if m["emits"] else "no",
                 "yes" if m["volume"] else "no"] for m in trade.modelled]))
     loads = trade.loads
-    b.append(("p", "Profiles loaded: " + (", ".join(loads.get("profiles", [])) or "none")
-                   + "; image textures: " + (", ".join(loads.get("textures", [])) or "none")
-                   + "."))
+    b.append(("p", "Lights: " + (", ".join(trade.lights) or "none") + ". Profiles loaded: "
+                   + (", ".join(loads.get("profiles", [])) or "none") + "; image textures: "
+                   + (", ".join(loads.get("textures", [])) or "none") + "."))
     b.append(("h", 2, "Error against cost"))
     b.append(("img", "error_vs_time.png", f"{METRICS[metric]} against wall time and peak "
                                           "memory; Pareto front in red; target dashed"))
@@ -271,7 +273,8 @@ def write_report(trade, out: Path, command: str = "") -> dict[str, Path]:
         "metric": trade.metric, "target": trade.target, "cost": trade.cost,
         "reference": {k: v for k, v in trade.reference.items() if k != "patch"},
         "recommended": trade.recommended.index if trade.recommended else None,
-        "modelled": trade.modelled, "loads": trade.loads, "skipped": trade.skipped,
+        "modelled": trade.modelled, "lights": trade.lights, "loads": trade.loads,
+        "skipped": trade.skipped,
         "runs": [{"index": r.index, "label": r.label, "family": r.family, "patch": r.patch,
                   **{k: v for k, v in r.record.items()}, "errors": r.errors,
                   "geometric_px": r.geometric_px, "meets": r.meets, "pareto": r.pareto,

@@ -6,9 +6,9 @@ for the cheapest combination that meets the target, the Pareto front.
    to the scene text, its settings and the render code), so a rerun reuses it.
 2. **Baseline**: the scene as written (at the report's resolution).
 3. **Sweep**: every option of every knob, one knob at a time from the baseline.
-4. **Combination**: the cheapest option of each knob that meets the target on its own,
-   all together; while the combination misses the target, the knob whose option erred
-   most goes back to the scene's value (at most :data:`COMBINE_ROUNDS` renders).
+4. **Combination**: the cheapest option of each knob that meets the target on its own;
+   starting from the one that saves most, each next one joins the combination if the
+   whole still meets the target (at most :data:`COMBINE_ROUNDS` renders).
 5. **Recommendation**: the fastest measured run that meets the target (never an
    unmeasured guess), written out as a scene file.
 
@@ -40,7 +40,7 @@ __all__ = ["Run", "Trade", "COSTS", "REFERENCE_SEED_OFFSET", "pareto_front", "ru
 COSTS = {"wall": "wall_s", "cpu": "cpu_s"}
 #: the reference's seed is the scene's plus this (its noise shared with no run)
 REFERENCE_SEED_OFFSET = 1_000_003
-COMBINE_ROUNDS = 4
+COMBINE_ROUNDS = 6
 #: an option joins the combination only if it alone saves this share of the time
 #: (smaller savings are within the timing noise of a shared machine)
 MIN_GAIN = 0.05
@@ -86,6 +86,7 @@ class Trade:
     recommended: Run | None
     recommended_text: str
     modelled: list[dict]
+    lights: list[str]
     loads: dict
     budget: float | None
     size: str
@@ -168,14 +169,16 @@ def reference_image(text: str, path: Path, out: Path, spp: int, given: Path | No
     return image, {**info, "reused": False, "patch": patch}
 
 
-def modelled_objects(text: str, path: Path, resolution) -> list[dict]:
-    """Per object: how the scene as written is modelled at ``resolution``
-    (:func:`render.scene.modelling_summary` of the built scene)."""
+def modelled_objects(text: str, path: Path, resolution) -> tuple[list[dict], list[str]]:
+    """How the scene as written is modelled at ``resolution``: per object
+    (:func:`render.scene.modelling_summary` of the built scene), and its lights."""
     from render.scene import modelling_summary, parse_scene, patch_scene_text
 
     scene = parse_scene(patch_scene_text(text, _resolution_patch(resolution)["render"]),
                         str(path), base_dir=path.parent)
-    return modelling_summary(scene, scene.build().stats)
+    summary = modelling_summary(scene, scene.build().stats)
+    lights = [type(light).__name__ for light in scene.lights]
+    return summary, lights + [f"area light {m['name']}" for m in summary if m["emits"]]
 
 
 def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: float = 0.05,
@@ -289,21 +292,21 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
             r = run(option.label, knob.family, option.patch)
             if r is not None:
                 r.record["knob"] = knob.name
-    # the combination: per knob, its fastest option that meets the target on its own
+    # the combination: per knob, its cheapest option that meets the target on its own;
+    # from the one that saves most, each next one joins if the whole still meets it
     picks = []
     for knob in chosen:
         ok = [r for r in runs if r.record.get("knob") == knob.name and r.meets
               and r.cost(cost) < (1.0 - MIN_GAIN) * baseline.cost(cost)]
         if ok:
             picks.append(min(ok, key=lambda r: r.cost(cost)))
-    for _ in range(COMBINE_ROUNDS):
-        if len(picks) < 2:
-            break
-        combo = run("combined: " + " + ".join(p.label for p in picks), "combined",
-                    merge(*(p.patch for p in picks)))
-        if combo is None or combo.meets:
-            break
-        picks.remove(max(picks, key=lambda p: p.error(metric)))
+    picks.sort(key=lambda r: r.cost(cost))
+    together = picks[:1]
+    for p in picks[1:1 + COMBINE_ROUNDS]:
+        combo = run("combined: " + " + ".join(q.label for q in together + [p]), "combined",
+                    merge(*(q.patch for q in together + [p])))
+        if combo is not None and combo.meets:
+            together.append(p)
     if bar is not None:
         bar.close()
     front = pareto_front([(r.cost(cost), r.error(metric)) for r in runs])
@@ -316,7 +319,7 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     rec_patch = merge(base if resolution else {}, recommended.patch if recommended else {})
     recommended_text = patch_scene_text(text, rec_patch["render"], rec_patch["objects"])
     return Trade(scene_path, text, names, res, metric, target, cost, ref_info, runs, skipped,
-                 recommended, recommended_text, modelled_objects(text, scene_path, res),
+                 recommended, recommended_text, *modelled_objects(text, scene_path, res),
                  {k: sorted(v) for k, v in loads.items()}, budget, size,
                  time.perf_counter() - started)
 

@@ -36,6 +36,8 @@ def test_trade_in_ci_size_on_every_scene_of_chapters_12_to_15(scene, tmp_path):
     assert base.label == "the scene as written" and base.patch == {"render": {}, "objects": {}}
     families = {r.family for r in runs}
     assert {"baseline", "samples", "paths"} <= families
+    assert trade.lights and [m["name"] for m in trade.modelled] == [
+        o.name for o in load_scene(scene).objects]
     displaced = [m for m in trade.modelled if m["displacement"] != "none"]
     assert ("dicing" in families) == any(m["displacement"] == "displacement" for m in displaced)
     assert ("displacement" in families) == bool(displaced)
