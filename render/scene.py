@@ -353,7 +353,8 @@ def _model_what_is_seen(obj: SceneObject, camera: Camera, settings: RenderSettin
     """``obj``, or, where the camera cannot see its displacement, a copy that is not diced:
     a displacement of zero length here is dropped; one under the dicing tolerance, or on
     an object out of view, is shaded as bump from the same field (its normals still
-    show).  Mesh surfaces, and objects already modelled otherwise, are kept."""
+    show).  Its triangles are then the undisplaced surface as coarse as the tolerance
+    allows.  Mesh surfaces, and objects already modelled otherwise, are kept."""
     import dataclasses
 
     from displacement.dice import displacement_on_screen, is_mesh_surface
@@ -364,7 +365,8 @@ def _model_what_is_seen(obj: SceneObject, camera: Camera, settings: RenderSettin
             obj.surface):
         return obj
     tolerance = obj.dicing_tolerance or settings.dicing_tolerance
-    pixels, in_view = displacement_on_screen(obj.surface, field_, camera, obj.transform)
+    pixels, in_view = displacement_on_screen(obj.surface, field_, camera, obj.transform,
+                                             stop_above=tolerance)
     if pixels == 0.0:
         why, material, method = "its displacement is zero", without_displacement(
             obj.material), "none"
@@ -539,7 +541,9 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
 
     field_ = obj.displacement
     surface = obj.surface
-    if field_ is not None:
+    # a displacement not diced because the camera cannot see it: the base surface as
+    # coarse as the tolerance allows for this camera (the dicer without a field)
+    if field_ is not None or obj.not_diced:
         mesh = dice(
             surface,
             field_,
@@ -552,11 +556,13 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
         tu = _unit_rows(mesh.tangents)
         tv = _unit_rows(np.cross(n, tu))
         st = {
-            "diced": True,
+            "diced": field_ is not None,
             "triangles": mesh.triangle_count,
             "dice_time_s": mesh.stats.get("time_s"),
             "max_error_px": mesh.stats.get("max_error_px"),
         }
+        if obj.not_diced:
+            st["not_diced"] = obj.not_diced
         return (mesh.vertices, mesh.faces.astype(np.int64), mesh.uv, n, tu, tv), st
     if is_mesh_surface(surface):
         base = surface.base_mesh()
@@ -580,8 +586,6 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
     tu = _unit_rows(state.tangent_u @ obj.linear.T)
     tv = _unit_rows(state.tangent_v @ obj.linear.T)
     st = {"diced": False, "triangles": len(new_faces)}
-    if obj.not_diced:
-        st["not_diced"] = obj.not_diced
     return (verts, new_faces, state.uv, n, tu, tv), st
 
 

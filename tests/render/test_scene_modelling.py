@@ -237,3 +237,17 @@ def test_not_dicing_an_invisible_displacement_changes_the_image_by_noise_only():
     again = render(_waves_square(1e-4, spp=16, seed=7, dice_invisible=True), progress=False)
     noise = image_errors(again.rgb(), diced.rgb())["rmse"]
     assert image_errors(culled.rgb(), diced.rgb())["rmse"] < 0.25 * noise
+
+
+def test_pwc_render_says_what_it_modelled(tmp_path):
+    from repo import run_pwc
+
+    r = run_pwc("render", bundled_scenes() / "fig_14_03.toml", "-o", tmp_path / "x.exr",
+                "--resolution", 16, 12, "--spp", 1, "--aov", "depth")
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    assert ("  displaced_square: base mesh: 2 triangles (not diced: its displacement is "
+            "zero); thin-walled, diffuse_reflection_bsdf") in lines
+    assert "  light_left: base mesh: 2 triangles (not displaced); emits, diffuse_edf" in lines
+    assert lines[-1] == ("  lights: ConstantEnvironment, area (light_left), area "
+                         "(light_right); volumes: none; AOVs: depth")
