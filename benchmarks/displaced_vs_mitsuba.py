@@ -221,7 +221,7 @@ def markdown(rows, args) -> str:
         lines.append(f"| {r['scene']} | {r['target']:.3g} ({r['floor']:.3g}) | ours | "
                      f"adaptive, {r['adaptive_px']:.2f} px | {o[3]:,} | {o[0]} | {o[1]:.2f} | "
                      f"{o[2]:.0f} | {o[4]:.3g} | {o[1] / m[1]:.2f}x, "
-                     f"{o[2] / max(m[2], 1e-9):.2f}x, {o[3] / m[3]:.3f}x |")
+                     f"{o[2] / max(m[2], 1e-9):.2f}x, {o[3] / m[3]:.2g}x |")
         lines.append(f"| | | Mitsuba 3 | uniform ({grids}; {r['tess_s']:.2f} s beforehand) | "
                      f"{m[3]:,} | {m[0]} | {m[1]:.2f} | {m[2]:.0f} | {m[4]:.3g} | |")
     return "\n".join(lines) + "\n"
