@@ -116,6 +116,8 @@ def knobs_for(scene, loads: dict, size: str = "full", denoiser: bool = True) -> 
     Parameters
     ----------
     scene : render.scene.Scene
+        Built (:meth:`render.scene.Scene.build`): an object whose displacement the camera
+        cannot see was not diced, and offers no displacement knob.
     loads : dict
         The profiles and textures its materials loaded
         (:func:`render.library.resources.track_loads`).
@@ -139,7 +141,7 @@ def knobs_for(scene, loads: dict, size: str = "full", denoiser: bool = True) -> 
     knobs.append(samples)
     for i, obj in enumerate(scene.objects):
         field_ = obj.original_displacement or obj.displacement
-        if field_ is None:
+        if field_ is None or obj.not_diced:  # no relief, or none the camera can see
             continue
         if obj.displacement_method == "displacement":  # diced: its dicing is a knob
             tol = obj.dicing_tolerance or st.dicing_tolerance

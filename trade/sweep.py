@@ -169,16 +169,19 @@ def reference_image(text: str, path: Path, out: Path, spp: int, given: Path | No
     return image, {**info, "reused": False, "patch": patch}
 
 
-def modelled_objects(text: str, path: Path, resolution) -> tuple[list[dict], list[str]]:
-    """How the scene as written is modelled at ``resolution``: per object
-    (:func:`render.scene.modelling_summary` of the built scene), and its lights."""
+def as_written(text: str, path: Path, resolution):
+    """The scene as written, at ``resolution``, built: ``(scene, loads, summary, lights)``
+    (what its materials loaded, :func:`render.scene.modelling_summary`, its lights)."""
+    from render.library.resources import track_loads
     from render.scene import modelling_summary, parse_scene, patch_scene_text
 
-    scene = parse_scene(patch_scene_text(text, _resolution_patch(resolution)["render"]),
-                        str(path), base_dir=path.parent)
+    with track_loads() as loads:
+        scene = parse_scene(patch_scene_text(text, _resolution_patch(resolution)["render"]),
+                            str(path), base_dir=path.parent)
     summary = modelling_summary(scene, scene.build().stats)
     lights = [type(light).__name__ for light in scene.lights]
-    return summary, lights + [f"area light {m['name']}" for m in summary if m["emits"]]
+    lights += [f"area light {m['name']}" for m in summary if m["emits"]]
+    return scene, {k: sorted(v) for k, v in loads.items()}, summary, lights
 
 
 def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: float = 0.05,
@@ -216,7 +219,6 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     repeats : int
         Time each run this many times and keep the fastest.
     """
-    from render.library.resources import track_loads
     from render.scene import parse_scene, patch_scene_text
 
     if metric not in METRICS:
@@ -226,10 +228,10 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     started = time.perf_counter()
     scene_path = Path(scene_path)
     text = scene_path.read_text(encoding="utf-8")
-    with track_loads() as loads:
-        scene = parse_scene(text, str(scene_path), base_dir=scene_path.parent)
+    written = parse_scene(text, str(scene_path), base_dir=scene_path.parent).settings
+    res = tuple(resolution) if resolution else (written.width, written.height)
+    scene, loads, modelled, lights = as_written(text, scene_path, res)
     names = [o.name for o in scene.objects]
-    res = tuple(resolution) if resolution else (scene.settings.width, scene.settings.height)
     ref_spp = reference_spp or (64 if size == "ci" else max(256, 16 * scene.settings.spp))
     ref_image, ref_info = reference_image(text, scene_path, out, ref_spp, reference,
                                           fresh_reference, res, threads, log)
@@ -319,8 +321,7 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     rec_patch = merge(base if resolution else {}, recommended.patch if recommended else {})
     recommended_text = patch_scene_text(text, rec_patch["render"], rec_patch["objects"])
     return Trade(scene_path, text, names, res, metric, target, cost, ref_info, runs, skipped,
-                 recommended, recommended_text, *modelled_objects(text, scene_path, res),
-                 {k: sorted(v) for k, v in loads.items()}, budget, size,
+                 recommended, recommended_text, modelled, lights, loads, budget, size,
                  time.perf_counter() - started)
 
 
