@@ -197,16 +197,18 @@ def main(argv=None) -> int:
     return 0
 
 
-def write_doc(path: Path, table: str) -> None:
-    """Replace the table between the markers of ``path`` (or write the page)."""
-    start, end = "<!-- table: start -->", "<!-- table: end -->"
+def write_doc(path: Path, table: str, name: str = "table",
+              title: str = "# Bump versus true displacement") -> None:
+    """Replace the table between the ``<!-- NAME: start/end -->`` markers of ``path``
+    (append them, or write a page with ``title``, where they are missing)."""
+    start, end = f"<!-- {name}: start -->", f"<!-- {name}: end -->"
     block = f"{start}\n{table}{end}"
-    if path.exists() and start in (text := path.read_text()) and end in text:
+    text = path.read_text() if path.exists() else f"{title}\n"
+    if start in text and end in text:
         before, rest = text.split(start, 1)
-        after = rest.split(end, 1)[1]
-        path.write_text(before + block + after)
+        path.write_text(before + block + rest.split(end, 1)[1])
     else:
-        path.write_text(f"# Bump versus true displacement\n\n{block}\n")
+        path.write_text(f"{text}\n{block}\n")
 
 
 if __name__ == "__main__":

@@ -51,6 +51,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from bump_vs_displacement import write_doc  # noqa: E402
 from dicing import equal_error_search, measure, worst  # noqa: E402
 from render_vs_mitsuba import mitsuba_mesh  # noqa: E402
 
@@ -64,7 +65,6 @@ from trade.measure import PeakMemory  # noqa: E402
 from trade.metrics import image_errors  # noqa: E402
 
 DOC = ROOT / "docs" / "trade.md"
-START, END = "<!-- mitsuba: start -->", "<!-- mitsuba: end -->"
 SCENES = ("fig_14_28", "fig_14_04", "fig_15_21")
 GREY = 0.5
 
@@ -257,13 +257,7 @@ def main(argv=None) -> int:
     print(table)
     doc = Path(args.doc) if args.doc else (None if args.quick else DOC)
     if doc is not None:
-        text = doc.read_text()
-        if START in text and END in text:
-            before, rest = text.split(START, 1)
-            text = before + START + "\n" + table + END + rest.split(END, 1)[1]
-        else:
-            text += f"\n{START}\n{table}{END}\n"
-        doc.write_text(text)
+        write_doc(doc, table, "mitsuba")
         print(f"wrote {doc}")
     return 0
 

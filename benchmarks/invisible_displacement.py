@@ -24,6 +24,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from bump_vs_displacement import write_doc  # noqa: E402
 
 from render.integrator import render  # noqa: E402
 from render.library.resources import bundled_scenes  # noqa: E402
@@ -31,7 +34,6 @@ from render.scene import load_scene  # noqa: E402
 from trade.metrics import image_errors  # noqa: E402
 
 DOC = ROOT / "docs" / "trade.md"
-START, END = "<!-- invisible: start -->", "<!-- invisible: end -->"
 
 
 def build(path: Path, size, dice_invisible: bool, repeats: int):
@@ -127,13 +129,7 @@ def main(argv=None) -> int:
     print(table)
     doc = Path(args.doc) if args.doc else (None if args.quick else DOC)
     if doc is not None:
-        text = doc.read_text()
-        if START in text and END in text:
-            before, rest = text.split(START, 1)
-            text = before + START + "\n" + table + END + rest.split(END, 1)[1]
-        else:
-            text += f"\n{START}\n{table}{END}\n"
-        doc.write_text(text)
+        write_doc(doc, table, "invisible")
         print(f"wrote {doc}")
     return 0
 
