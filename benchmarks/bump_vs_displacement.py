@@ -10,12 +10,14 @@ float2(0.075, 0.075))``).  The same look is rendered, at the same samples per pi
 * **displaced**: the Handbook's material; the renderer dices both objects for the camera
   (``displacement.dice``) and traces the displaced triangles;
 * **bump, baked normal map**: the displacement baked per object into a 16-bit
-  tangent-space normal map (``displacement.bake``, ``--map-size`` texels square), read
-  back and applied with the Handbook's ``normal_map_bump`` (Listing 13.19) over the
-  same diffuse surface; the objects stay flat (the base mesh);
+  tangent-space normal map (``displacement.bake``, ``--map-size`` texels square, quantized
+  as the file stores it) and applied with the Handbook's ``normal_map_bump`` (Listing
+  13.19) over the same surface; the objects stay flat (the base mesh).  This is the scene
+  files' ``displacement_method = "normal_map"`` (:mod:`render.displacement_method`);
 * **bump, procedural normal**: the exact normal of the displaced surface computed at
   every shading point (``displacement.bake.displaced_normal``), no map: what bump can
-  do at best, so the map's own error is seen apart from bump's;
+  do at best, so the map's own error is seen apart from bump's (``displacement_method =
+  "bump"``);
 * **shading only**: ``waves_as_grayscale(frequency: float2(4.0, 4.0))`` (Listing 12.4),
   the version that the Handbook timed at 57 % of ``waves_as_displacement`` (section
   12.2): a different look, timed for comparison;
@@ -33,7 +35,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -42,10 +43,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from displacement.bake import bake, displaced_normal, read_normal_map, write_normal_map  # noqa: E402
+from render.displacement_method import apply  # noqa: E402
 from render.film import linear_to_srgb  # noqa: E402
 from render.integrator import Integrator  # noqa: E402
-from render.material import Varying, material, material_geometry  # noqa: E402
+from render.material import material  # noqa: E402
 from render.materials import MATERIALS  # noqa: E402
 from render.scene import load_scene  # noqa: E402
 
@@ -82,44 +83,26 @@ def timed_render(scene, spp: int, seed: int, repeats: int = 1) -> dict:
             "rays": film.stats["rays"]}
 
 
+def with_method(scene, method: str, map_size: int = 512, bake_times: list | None = None):
+    """A copy of ``scene`` whose displaced objects are modelled by ``method``
+    (:mod:`render.displacement_method`: ``"bump"`` or a 16-bit ``"normal_map"``)."""
+    objects = []
+    for o in scene.objects:
+        if o.displacement is not None:
+            t0 = time.perf_counter()
+            o = dataclasses.replace(o, material=apply(o.material, o.surface, method, map_size, 16),
+                                    displacement_method=method)
+            if bake_times is not None:
+                bake_times.append(time.perf_counter() - t0)
+        objects.append(o)
+    return dataclasses.replace(scene, objects=objects)
+
+
 def with_materials(scene, make):
     """A copy of ``scene`` whose displaced objects get ``make(obj)`` as their material."""
     objects = [dataclasses.replace(o, material=make(o)) if o.displacement is not None else o
                for o in scene.objects]
     return dataclasses.replace(scene, objects=objects)
-
-
-def flat(obj) -> material:
-    """The object's material without its displacement (same surface)."""
-    m = obj.material
-    return material(thin_walled=m.thin_walled, surface=m.surface, backface=m.backface,
-                    ior=m.ior, volume=m.volume)
-
-
-def baked_bump(map_size: int, folder: Path, bake_times: list):
-    """``obj -> normal_map_bump(...)`` with the object's displacement baked to a 16-bit PNG."""
-    def make(obj):
-        t0 = time.perf_counter()
-        maps = bake(obj.displacement, obj.surface, size=map_size)
-        path = write_normal_map(folder / f"{obj.name}_normal.png", maps.normal, bits=16)
-        texture = read_normal_map(path)
-        bake_times.append(time.perf_counter() - t0)
-        return MATERIALS["normal_map_bump"](surface_material=flat(obj), texture=texture)
-    return make
-
-
-def procedural_bump(obj) -> material:
-    """The displaced surface's exact normal at each shading point (bump without a map)."""
-    field, surface = obj.displacement, obj.surface
-    step = 1e-4
-
-    def normal(state):
-        n, _, _ = displaced_normal(field, surface, state.uv, step)
-        return n
-
-    m = flat(obj)
-    return material(surface=m.surface,
-                    geometry=material_geometry(normal=Varying(normal, "displaced_normal")))
 
 
 def shading_only(obj) -> material:
@@ -132,32 +115,31 @@ def run(args) -> list[dict]:
                                               "spp": args.spp})
     timed_render(scene, 1, 0)  # warm-up: imports, Embree, caches (not timed)
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
-        bake_times: list[float] = []
-        variants = [
-            ("displaced", scene, 1),
-            ("bump, baked normal map", with_materials(
-                scene, baked_bump(args.map_size, Path(tmp), bake_times)), 2),
-            ("bump, procedural normal", with_materials(scene, procedural_bump), 2),
-            ("shading only (waves_as_grayscale)", with_materials(scene, shading_only), 2),
-            ("displaced, another seed", scene, 2),
-        ]
-        reference = None
-        for name, sc, seed in variants:
-            r = timed_render(sc, args.spp, seed, args.repeats)
-            r["name"] = name
-            if reference is None:
-                reference = r
-            else:
-                r["rmse"], r["flip"] = errors(r["image"], reference["image"])
-            r["ratio"] = r["total_s"] / reference["total_s"]
-            if name.startswith("bump, baked"):
-                r["bake_s"] = sum(bake_times)
-            rows.append(r)
-            print(f"{name}: {r['total_s']:.2f} s ({r['ratio']:.0%} of displaced), "
-                  f"{r['triangles']} triangles"
-                  + (f", RMSE {r['rmse']:.4f}, FLIP {r['flip']:.4f}" if "rmse" in r else ""),
-                  flush=True)
+    bake_times: list[float] = []
+    variants = [
+        ("displaced", scene, 1),
+        ("bump, baked normal map", with_method(scene, "normal_map", args.map_size,
+                                               bake_times), 2),
+        ("bump, procedural normal", with_method(scene, "bump"), 2),
+        ("shading only (waves_as_grayscale)", with_materials(scene, shading_only), 2),
+        ("displaced, another seed", scene, 2),
+    ]
+    reference = None
+    for name, sc, seed in variants:
+        r = timed_render(sc, args.spp, seed, args.repeats)
+        r["name"] = name
+        if reference is None:
+            reference = r
+        else:
+            r["rmse"], r["flip"] = errors(r["image"], reference["image"])
+        r["ratio"] = r["total_s"] / reference["total_s"]
+        if name.startswith("bump, baked"):
+            r["bake_s"] = sum(bake_times)
+        rows.append(r)
+        print(f"{name}: {r['total_s']:.2f} s ({r['ratio']:.0%} of displaced), "
+              f"{r['triangles']} triangles"
+              + (f", RMSE {r['rmse']:.4f}, FLIP {r['flip']:.4f}" if "rmse" in r else ""),
+              flush=True)
     return rows
 
 
@@ -180,7 +162,7 @@ def markdown(rows: list[dict], args) -> str:
     scene = Path(args.scene).resolve()
     scene = scene.relative_to(ROOT) if scene.is_relative_to(ROOT) else scene
     head = (f"{w} x {h} px, {args.spp} spp, normal maps {args.map_size} x {args.map_size} "
-            f"16-bit PNG, fastest of {args.repeats} runs, scene `{scene}`")
+            f"16-bit, fastest of {args.repeats} runs, scene `{scene}`")
     return head + "\n\n" + "\n".join(lines) + "\n"
 
 
@@ -215,16 +197,18 @@ def main(argv=None) -> int:
     return 0
 
 
-def write_doc(path: Path, table: str) -> None:
-    """Replace the table between the markers of ``path`` (or write the page)."""
-    start, end = "<!-- table: start -->", "<!-- table: end -->"
+def write_doc(path: Path, table: str, name: str = "table",
+              title: str = "# Bump versus true displacement") -> None:
+    """Replace the table between the ``<!-- NAME: start/end -->`` markers of ``path``
+    (append them, or write a page with ``title``, where they are missing)."""
+    start, end = f"<!-- {name}: start -->", f"<!-- {name}: end -->"
     block = f"{start}\n{table}{end}"
-    if path.exists() and start in (text := path.read_text()) and end in text:
+    text = path.read_text() if path.exists() else f"{title}\n"
+    if start in text and end in text:
         before, rest = text.split(start, 1)
-        after = rest.split(end, 1)[1]
-        path.write_text(before + block + after)
+        path.write_text(before + block + rest.split(end, 1)[1])
     else:
-        path.write_text(f"# Bump versus true displacement\n\n{block}\n")
+        path.write_text(f"{text}\n{block}\n")
 
 
 if __name__ == "__main__":

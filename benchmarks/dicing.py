@@ -87,15 +87,15 @@ def knot_uv(field, per_line, rng):
     return np.concatenate(pts) if pts else np.zeros((0, 2))
 
 
-def measure(mesh, surface, field, cam, samples, rng):
+def measure(mesh, surface, field, cam, samples, rng, transform=None):
     """(max, mean) error in random points; (max, mean) on the knot lines (or None)."""
     # at least 4 points per triangle; small meshes get up to `samples` points in all
     per = int(min(2000, max(4, samples // max(1, mesh.triangle_count))))
-    e = screen_error(mesh, surface, field, cam, samples_per_triangle=per, max_samples=samples,
-                     rng=rng)
+    e = screen_error(mesh, surface, field, cam, transform, samples_per_triangle=per,
+                     max_samples=samples, rng=rng)
     kuv = knot_uv(field, 400, rng)
     if len(kuv):
-        ek = screen_error(mesh, surface, field, cam, uv=kuv)
+        ek = screen_error(mesh, surface, field, cam, transform, uv=kuv)
         knots = (float(ek.max(initial=0.0)), float(ek.mean()) if ek.size else 0.0)
     else:
         knots = None
@@ -107,19 +107,19 @@ def worst(err):
     return max(m, k[0]) if k else m
 
 
-def run_uniform(surface, field, cam, n, samples, rng):
-    mesh = dice(surface, field, cam, uniform=n, max_triangles=2 * n * n + 2)
-    return mesh, measure(mesh, surface, field, cam, samples, rng)
+def run_uniform(surface, field, cam, n, samples, rng, transform=None):
+    mesh = dice(surface, field, cam, transform, uniform=n, max_triangles=2 * n * n + 2)
+    return mesh, measure(mesh, surface, field, cam, samples, rng, transform)
 
 
-def equal_error_search(surface, field, cam, target, samples, rng, n_max, bar):
+def equal_error_search(surface, field, cam, target, samples, rng, n_max, bar, transform=None):
     """Smallest uniform n (by bisection on a log scale) whose measured error <= target."""
     lo, hi = 4, None
     cache = {}
 
     def ok(n):
         if n not in cache:
-            mesh, err = run_uniform(surface, field, cam, n, samples, rng)
+            mesh, err = run_uniform(surface, field, cam, n, samples, rng, transform)
             cache[n] = (mesh.stats["triangles"], mesh.stats["time_s"], err)
             if bar is not None:
                 bar.set_postfix_str(f"uniform n={n}: {worst(err):.3f} px")

@@ -215,24 +215,31 @@ def mitsuba_render(mi, scene, spp, seed):
     return img, time.perf_counter() - t0
 
 
+def mitsuba_mesh(mi, name, vertices, normals, faces, shape: dict):
+    """A Mitsuba mesh of triangles (positions, vertex normals) with the ``bsdf`` and
+    ``emitter`` of the shape dict ``shape``."""
+    used, local = np.unique(faces, return_inverse=True)
+    props = mi.Properties()
+    for key in ("bsdf", "emitter"):
+        if key in shape:
+            props[key] = mi.load_dict(shape[key])
+    mesh = mi.Mesh(name, len(used), len(faces), props, has_vertex_normals=True)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(vertices[used].astype(np.float32).ravel())
+    params["vertex_normals"] = mi.Float(normals[used].astype(np.float32).ravel())
+    params["faces"] = mi.UInt32(local.astype(np.uint32).ravel())
+    params.update()
+    return mesh
+
+
 def same_triangles(mi, md, geometry, names):
     """``md`` with every shape replaced by a Mitsuba mesh of our triangles (positions and
     vertex normals of ``geometry``, object ``k`` being ``names[k]``)."""
     out = dict(md)
     for k, name in enumerate(names):
         faces = geometry.faces[geometry.face_offset[k] : geometry.face_offset[k + 1]]
-        used, local = np.unique(faces, return_inverse=True)
-        props = mi.Properties()
-        for key in ("bsdf", "emitter"):
-            if key in md[name]:
-                props[key] = mi.load_dict(md[name][key])
-        mesh = mi.Mesh(name, len(used), len(faces), props, has_vertex_normals=True)
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = mi.Float(geometry.vertices[used].astype(np.float32).ravel())
-        params["vertex_normals"] = mi.Float(geometry.normals[used].astype(np.float32).ravel())
-        params["faces"] = mi.UInt32(local.astype(np.uint32).ravel())
-        params.update()
-        out[name] = mesh
+        out[name] = mitsuba_mesh(mi, name, geometry.vertices, geometry.normals, faces,
+                                 md[name])
     return out
 
 

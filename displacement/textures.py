@@ -61,6 +61,9 @@ __all__ = [
     "WRAP_MODES",
 ]
 
+#: texture filters, cheapest first
+FILTERS = ("nearest", "bilinear")
+
 #: MDL ``tex::wrap_mode`` values supported by :meth:`Texture.lookup`.
 WRAP_MODES = ("repeat", "clamp", "mirrored_repeat")
 
@@ -119,6 +122,9 @@ class Texture:
         Where it came from (a path), for messages.
     channel_names : tuple of str
         One name per channel (``("R", "G", "B")``, ``("N.X", "N.Y", "N.Z")``, ``("Y",)``).
+    filter : {"bilinear", "nearest"}
+        How :meth:`lookup` filters when not told (a speed/accuracy choice of the scene:
+        ``[render] texture_filter``).
 
     Examples
     --------
@@ -132,8 +138,12 @@ class Texture:
     data: np.ndarray
     name: str = "<array>"
     channel_names: tuple[str, ...] = field(default=())
+    filter: str = "bilinear"
 
     def __post_init__(self) -> None:
+        if self.filter not in FILTERS:
+            raise ValueError(f"texture {self.name}: filter must be one of {', '.join(FILTERS)}, "
+                             f"not {self.filter!r}")
         a = np.asarray(self.data, dtype=np.float64)
         if a.ndim == 2:
             a = a[:, :, None]
@@ -174,7 +184,7 @@ class Texture:
         uv: np.ndarray,
         wrap_u: str = "repeat",
         wrap_v: str = "repeat",
-        filter: str = "bilinear",
+        filter: str | None = None,
     ) -> np.ndarray:
         """Filtered value at texture coordinates ``uv`` (MDL ``tex::lookup_*``).
 
@@ -188,14 +198,15 @@ class Texture:
         wrap_u, wrap_v : {"repeat", "clamp", "mirrored_repeat"}
             MDL ``tex::wrap_repeat`` (the default), ``wrap_clamp``,
             ``wrap_mirrored_repeat``.
-        filter : {"bilinear", "nearest"}
+        filter : {"bilinear", "nearest"} or None
             Bilinear interpolation between the four nearest texel centres, or the
-            nearest texel.
+            nearest texel; None: the texture's own :attr:`filter`.
 
         Returns
         -------
         (n, C) float64
         """
+        filter = self.filter if filter is None else filter
         uv = _as_uv(uv, self.name)
         x = self._axis(uv[:, 0], self.width, wrap_u, flip=False)
         y = self._axis(uv[:, 1], self.height, wrap_v, flip=True)

@@ -106,8 +106,30 @@ class _Builder:
         else:
             self.row(kind, p, a, b, arc_through(a, b, bulge))
 
+    def in_range(self) -> bool:
+        """Whether the coordinates can be compiled in double precision (else an error)."""
+        pts, tree = self.pts, self.tree
+        bad = np.flatnonzero(~np.all(np.isfinite(pts), axis=1))
+        if len(bad):
+            self.diag("error", tree.points[bad[0]], "this point's coordinates overflow double "
+                      "precision (beyond 1.8e308, after adding up the offsets)",
+                      "scale the whole list down")
+            return False
+        if self.extent == 0.0:
+            return True  # every point at the origin: reported by build()
+        if not TOL.coordinate_min <= self.extent <= TOL.coordinate_max:
+            i = int(np.argmax(np.abs(pts).max(axis=1)))
+            self.diag("error", tree.points[i], f"the largest coordinate, {self.extent:.3g}, "
+                      f"is outside [{TOL.coordinate_min:g}, {TOL.coordinate_max:g}]: the "
+                      "curve cannot be normalized in double precision",
+                      "scale the whole list (every coordinate) into that range")
+            return False
+        return True
+
     def build(self) -> None:
         pts, tree = self.pts, self.tree
+        if not self.in_range():
+            return
         self.row(PwType.SEGMENT, tree.points[0], pts[0], pts[0])  # the start: no piece
         same_tol = TOL.same_point_rel * self.extent
         for i in range(1, len(pts)):
@@ -125,7 +147,15 @@ class _Builder:
                 self.diag("error", p, f"':{p.prop}' joins two identical points: an arc needs "
                           "two distinct end points", "move this point or delete the line")
                 continue
+            n = len(self.rows)
             getattr(self, "_" + p.prop)(p, a, b)
+            if not all(math.isfinite(r[k]) for r in self.rows[n:]
+                       for k in ("radius", "length", "start", "end")) or not all(
+                    math.isfinite(x) for r in self.rows[n:] for x in r["center"]):
+                del self.rows[n:]
+                self.diag("error", p, f"':{p.prop}': this arc's centre or radius overflows "
+                          "double precision (its sagitta is far larger than its chord)",
+                          "use a smaller angle or sagitta, or scale the list down")
         if len(self.rows) < 2 and not any(d.severity == "error" for d in self.diags):
             self.diag("error", tree.points[-1], "every point is at the same place: the curve "
                       "has no length", "give the points different coordinates")

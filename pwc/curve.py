@@ -10,7 +10,7 @@ the arc length from the start and the inverse mapping is exact.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import IntEnum
 from functools import cached_property
 from typing import NamedTuple
@@ -78,6 +78,10 @@ class Curve:
         1-based source line of each point (a cyma's two points share one line).
     text : tuple of str
         Source line of each point, without its comment.
+    precision : {"float64", "float32"}
+        The float type :meth:`evaluate` computes in when given float64 positions:
+        ``"float32"`` evaluates as MDL's ``float`` would (a renderer's choice, traded
+        for speed; :meth:`in_float32`), and returns float64.
     """
 
     name: str
@@ -94,8 +98,11 @@ class Curve:
     source: str = "<string>"
     line: np.ndarray = field(default=None)  # type: ignore[assignment]
     text: tuple[str, ...] = ()
+    precision: str = "float64"
 
     def __post_init__(self) -> None:
+        if self.precision not in ("float64", "float32"):
+            raise ValueError(f"precision must be 'float64' or 'float32', got {self.precision!r}")
         n = len(self.t)
         if self.line is None:
             object.__setattr__(self, "line", np.zeros(n, dtype=np.int64))
@@ -224,6 +231,8 @@ class Curve:
         [[0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [1.0, 1.0]]
         """
         s = np.asarray(s)
+        if self.precision == "float32" and s.dtype != np.float32:
+            return self.evaluate(s.astype(np.float32), repeat).astype(np.float64)
         s = s.astype(np.float32 if s.dtype == np.float32 else np.float64, copy=False)
         if repeat is not None:
             return self._evaluate_repeat(s, repeat)
@@ -311,6 +320,35 @@ class Curve:
         pts = self.evaluate(s)
         pts[knots] = self.pt  # pw-points exactly, not recomputed from their arcs
         return s, pts
+
+    def in_float32(self) -> Curve:
+        """This curve, evaluated in float32 (MDL's ``float``) whatever it is given."""
+        return replace(self, precision="float32")
+
+    def as_polyline(self, tolerance: float) -> Curve:
+        """The polyline of :meth:`polyline` as a curve of segments (what a renderer without
+        arcs would trace), parametrized by its own arc length.
+
+        Examples
+        --------
+        >>> from pwc import compile_text
+        >>> c = compile_text("0 0\\n1 1 :angle 90")
+        >>> p = c.as_polyline(1e-3)
+        >>> p.n, bool(np.all(p.type == PwType.SEGMENT)), round(p.length / c.length, 4)
+        (19, True, 0.9997)
+        """
+        _, pts = self.polyline(tolerance)
+        keep = np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0.0, axis=1)])
+        pts = pts[keep]
+        lengths = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        cum = np.concatenate([[0.0], np.cumsum(lengths)])
+        t = cum / cum[-1]
+        t[-1] = 1.0
+        zeros = np.zeros(len(pts))
+        return Curve(name=self.name, type=np.zeros(len(pts), dtype=np.int8), t=t, pt=pts,
+                     center=np.zeros((len(pts), 2)), radius=zeros, start_angle=zeros.copy(),
+                     end_angle=zeros.copy(), length=float(cum[-1]), scale=self.scale,
+                     relative=self.relative, source=self.source, precision=self.precision)
 
 
 def point_along_pwc(curve_position, pwc: Curve, repeat: float | None = None) -> np.ndarray:

@@ -19,6 +19,11 @@ class Tolerances:
     #: its radius would exceed 1e7 chords, where ``center + radius * (cos, sin)`` loses
     #: more precision (~radius * 1e-16) than the straight chord deviates from the arc.
     flat_arc_rel: float = 1e-8
+    #: the largest |coordinate| of a list must lie in [coordinate_min, coordinate_max]:
+    #: normalizing divides by it, so its reciprocal must be a finite, normal double, with
+    #: room for the sums and chords of the constructions (outside: a clear error).
+    coordinate_min: float = 1e-305
+    coordinate_max: float = 1e305
 
 
 TOL = Tolerances()

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Film", "FilmPatch", "AOVS", "empty_aovs", "linear_to_srgb", "read_exr"]
+__all__ = ["Film", "FilmPatch", "AOVS", "FilmTooLarge", "available_memory",
+           "check_film_memory", "empty_aovs", "film_bytes", "linear_to_srgb", "read_exr"]
 
 #: the AOVs a film can keep, and their channel names in the EXR.
 AOVS = {
@@ -41,6 +42,71 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     """
     x = np.clip(np.nan_to_num(np.asarray(x, dtype=np.float64)), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
+
+
+#: bytes per pixel a render holds at its peak, measured with tracemalloc (1024^2): the
+#: film's sums (colour 24, alpha 8, count 8, object id 5) plus the largest transient, the
+#: sRGB preview made from them (100); each AOV channel adds its sum (8), its float32
+#: EXR copy and read-out (8), and its sum in the patch a chunk is merged from (8, since
+#: Film.add merges a FilmPatch); denoising adds its float32 colour, guides and output (48)
+FILM_BYTES = 45 + 100
+AOV_CHANNEL_BYTES = 24
+DENOISE_BYTES = 48
+
+
+class FilmTooLarge(ValueError):
+    """An image too large for this machine's memory (raised before any work starts)."""
+
+
+def film_bytes(width: int, height: int, aovs=(), denoise: bool = False) -> int:
+    """Peak bytes a ``width`` x ``height`` render and its outputs need (besides the scene).
+
+    Examples
+    --------
+    >>> film_bytes(1, 1), film_bytes(16384, 16384) / 2**30
+    (145, 36.25)
+    """
+    per_pixel = FILM_BYTES + AOV_CHANNEL_BYTES * sum(len(AOVS[a]) for a in aovs if a in AOVS)
+    return int(width) * int(height) * (per_pixel + (DENOISE_BYTES if denoise else 0))
+
+
+def available_memory() -> int | None:
+    """Bytes this process may still allocate: the kernel's ``MemAvailable``, capped by a
+    cgroup (container) limit; None where neither can be read (then nothing is refused)."""
+    found = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    found.append(int(line.split()[1]) * 1024)
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        used = Path("/sys/fs/cgroup/memory.current").read_text().strip()
+        if limit != "max":
+            found.append(int(limit) - int(used))
+    except (OSError, ValueError):
+        pass
+    return min(found) if found else None
+
+
+def check_film_memory(width: int, height: int, aovs=(), denoise: bool = False,
+                      available: int | None = None) -> int:
+    """Refuse, with :class:`FilmTooLarge`, an image whose film would not fit in memory.
+
+    ``available`` defaults to :func:`available_memory`.  Returns the bytes needed.
+    """
+    need = film_bytes(width, height, aovs, denoise)
+    available = available_memory() if available is None else available
+    if available is not None and need > available:
+        gb = 2.0**30
+        raise FilmTooLarge(
+            f"a {width} x {height} image needs about {need / gb:.1f} GB for its film and "
+            f"outputs, but only {available / gb:.1f} GB of memory is available; render it "
+            f"smaller (--resolution W H, or resolution = [w, h] in [render]), with fewer AOVs, "
+            f"or on a machine with more memory")
+    return need
 
 
 class Film:
@@ -66,6 +132,7 @@ class Film:
         if unknown:
             raise ValueError(f"unknown AOV {sorted(unknown)[0]!r}: choose from {', '.join(AOVS)}")
         self.aov_names = [a for a in AOVS if a in set(aovs)]
+        check_film_memory(self.width, self.height, self.aov_names)
         n = self.width * self.height
         self._rgb = np.zeros((n, 3))
         self._alpha = np.zeros(n)

@@ -813,6 +813,7 @@ def render(
     geometry = scene.build()
     build_s = _time.perf_counter() - t0
     aov_list = list(aovs)
+    denoise = denoise or bool(getattr(scene.settings, "denoise", False))  # or denoise = true
     if denoise:
         aov_list = list(dict.fromkeys(aov_list + ["albedo", "normal"]))
     integ = Integrator(scene, geometry, aov_list)

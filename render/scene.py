@@ -86,6 +86,8 @@ __all__ = [
     "Geometry",
     "load_scene",
     "parse_scene",
+    "patch_scene_text",
+    "modelling_summary",
     "make_transform",
     "SURFACE_TYPES",
 ]
@@ -154,6 +156,19 @@ class RenderSettings:
         Pixels; passed to :func:`displacement.dice.dice`.
     spp_per_pass : int
         Samples per pixel per pass (the unit of progress and of the time budget).
+    curves : {"exact", "float32", "polyline"}
+        How pwc profiles are evaluated (:func:`render.library.resources.evaluation`):
+        exact arcs in float64, the same in float32, or polylines within
+        ``curve_tolerance`` (normalized units).
+    curve_tolerance : float
+    texture_filter : {"bilinear", "nearest"}
+        How image textures are filtered.
+    denoise : bool
+        Denoise the image (Open Image Denoise) after rendering (``pwc render`` honours
+        it, as ``--denoise``).
+    dice_invisible : bool
+        Dice every displaced object.  By default (False) a displacement the camera
+        cannot see is not diced (:meth:`Scene.build`).
     """
 
     width: int = 256
@@ -166,6 +181,11 @@ class RenderSettings:
     dicing_rate: float = 1.0
     dicing_tolerance: float = 0.5
     spp_per_pass: int = 1
+    curves: str = "exact"
+    curve_tolerance: float = 1e-4
+    texture_filter: str = "bilinear"
+    denoise: bool = False
+    dice_invisible: bool = False
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -188,6 +208,22 @@ class RenderSettings:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be a number of pixels > 0, got {v!r}")
+        from displacement.textures import FILTERS
+        from render.library.resources import CURVE_MODES
+
+        if self.curves not in CURVE_MODES:
+            raise ValueError(f"curves must be one of {', '.join(map(repr, CURVE_MODES))}, got "
+                             f"{self.curves!r}")
+        v = self.curve_tolerance
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0):
+            raise ValueError(f"curve_tolerance must be a number > 0, got {v!r}")
+        if self.texture_filter not in FILTERS:
+            raise ValueError(f"texture_filter must be one of {', '.join(map(repr, FILTERS))}, "
+                             f"got {self.texture_filter!r}")
+        for name in ("denoise", "dice_invisible"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         return self
 
 
@@ -211,6 +247,17 @@ class SceneObject:
         keeps curved silhouettes smooth at the usual image sizes).
     material_text : str
         The MDL expression the material came from (for messages and the gallery).
+    dicing_rate, dicing_tolerance : float or None
+        Pixels: this object's own dicing settings (None: the scene's).
+    displacement_method : {"displacement", "bump", "normal_map"}
+        How the material's displacement was modelled (:mod:`render.displacement_method`;
+        applied to ``material`` when the scene is read).
+    original_displacement : Field or None
+        The displacement the material was written with, when ``displacement_method``
+        modelled it as bump or a normal map (``material`` then has none).
+    not_diced : str or None
+        Why :meth:`Scene.build` did not dice this displaced object (the camera cannot see
+        its displacement), or None.
     """
 
     surface: Any
@@ -219,6 +266,11 @@ class SceneObject:
     name: str = "object"
     resolution: tuple[int, int] | None = None
     material_text: str = ""
+    dicing_rate: float | None = None
+    dicing_tolerance: float | None = None
+    displacement_method: str = "displacement"
+    original_displacement: Any = None
+    not_diced: str | None = None
 
     def __post_init__(self) -> None:
         from displacement.dice.evaluator import check_transform
@@ -283,8 +335,52 @@ class Scene:
     path: str = "<scene>"
 
     def build(self, progress: bool = False) -> Geometry:
-        """Tessellate (dice displaced objects) and build the Embree scene."""
+        """Tessellate (dice displaced objects) and build the Embree scene.
+
+        Raises :class:`render.film.FilmTooLarge` first, before any dicing, when the image
+        would not fit in memory.
+        """
+        from render.film import check_film_memory
+
+        check_film_memory(self.camera.width, self.camera.height)
+        if not self.settings.dice_invisible:
+            self.objects = [_model_what_is_seen(o, self.camera, self.settings)
+                            for o in self.objects]
         return Geometry.build(self, progress=progress)
+
+
+def _model_what_is_seen(obj: SceneObject, camera: Camera, settings: RenderSettings):
+    """``obj``, or, where the camera cannot see its displacement, a copy that is not diced:
+    a displacement of zero length here is dropped; one under the dicing tolerance, or on
+    an object out of view, is shaded as bump from the same field (its normals still
+    show).  Its triangles are then the undisplaced surface as coarse as the tolerance
+    allows.  Mesh surfaces, and objects already modelled otherwise, are kept."""
+    import dataclasses
+
+    from displacement.dice import displacement_on_screen, is_mesh_surface
+    from render.displacement_method import apply, without_displacement
+
+    field_ = obj.displacement
+    if field_ is None or obj.displacement_method != "displacement" or is_mesh_surface(
+            obj.surface):
+        return obj
+    tolerance = obj.dicing_tolerance or settings.dicing_tolerance
+    pixels, in_view = displacement_on_screen(obj.surface, field_, camera, obj.transform,
+                                             stop_above=tolerance)
+    if pixels == 0.0:
+        why, material, method = "its displacement is zero", without_displacement(
+            obj.material), "none"
+    elif in_view and pixels > tolerance:
+        return obj
+    else:
+        why = ("out of view" if not in_view else
+               f"its displacement is {pixels:.2g} px here, under the {tolerance:g} px "
+               "tolerance")
+        material, method = apply(obj.material, obj.surface, "bump"), "bump"
+    return dataclasses.replace(obj, material=material, displacement_method=method,
+                               original_displacement=field_,
+                               not_diced=f"{why}: shaded as {method}" if method == "bump"
+                               else why)
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -339,6 +435,11 @@ class Geometry:
             stats.append(st)
         if not parts:
             raise ValueError("the scene has no objects")
+        if not any(len(p[1]) for p in parts):
+            names = ", ".join(repr(st["name"]) for st in stats)
+            raise ValueError(f"nothing to trace: every object ({names}) has zero area (a "
+                             "displacement that collapses a surface to a line or a point "
+                             "leaves no triangles)")
         v_off = np.cumsum([0] + [len(p[0]) for p in parts])
         f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
         vertices = np.concatenate([p[0] for p in parts])
@@ -431,24 +532,28 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
 
     field_ = obj.displacement
     surface = obj.surface
-    if field_ is not None:
+    # a displacement not diced because the camera cannot see it: the base surface as
+    # coarse as the tolerance allows for this camera (the dicer without a field)
+    if field_ is not None or obj.not_diced:
         mesh = dice(
             surface,
             field_,
             camera,
             obj.transform,
-            dicing_rate=settings.dicing_rate,
-            tolerance=settings.dicing_tolerance,
+            dicing_rate=obj.dicing_rate or settings.dicing_rate,
+            tolerance=obj.dicing_tolerance or settings.dicing_tolerance,
         )
         n = _unit_rows(mesh.normals)
         tu = _unit_rows(mesh.tangents)
         tv = _unit_rows(np.cross(n, tu))
         st = {
-            "diced": True,
+            "diced": field_ is not None,
             "triangles": mesh.triangle_count,
             "dice_time_s": mesh.stats.get("time_s"),
             "max_error_px": mesh.stats.get("max_error_px"),
         }
+        if obj.not_diced:
+            st["not_diced"] = obj.not_diced
         return (mesh.vertices, mesh.faces.astype(np.int64), mesh.uv, n, tu, tv), st
     if is_mesh_surface(surface):
         base = surface.base_mesh()
@@ -473,6 +578,88 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
     tv = _unit_rows(state.tangent_v @ obj.linear.T)
     st = {"diced": False, "triangles": len(new_faces)}
     return (verts, new_faces, state.uv, n, tu, tv), st
+
+
+def _triangle_area(obj: SceneObject) -> float:
+    """Total area of an undisplaced object's triangles, as the renderer builds them."""
+    (v, f, *_), _ = _object_triangles(obj, None, RenderSettings())
+    c = v[f]
+    return float(0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]),
+                                      axis=1).sum())
+
+
+def _df_names(node) -> set[str]:
+    """MDL names of a df node and every df inside it (layers, mixes, components)."""
+    from render.material import DfNode
+
+    if not isinstance(node, DfNode):
+        return set()
+    names = {node.name}
+    for value in node.kwargs.values():
+        for item in value if isinstance(value, tuple | list) else (value,):
+            names |= _df_names(item)
+    return names
+
+
+def modelling_summary(scene: Scene, geometry_stats: list) -> list[dict]:
+    """What was modelled for each object of a built scene, and why.
+
+    Parameters
+    ----------
+    scene : Scene
+    geometry_stats : list of dict
+        :attr:`Geometry.stats` (``film.stats["geometry"]``).
+
+    Returns
+    -------
+    list of dict
+        Per object: ``name``; ``geometry`` (diced, or the base mesh, with its triangle
+        count and why); ``displacement`` (its method, or none); ``normal`` (whether a
+        bumped normal is evaluated at each shading point); ``dfs`` (the distribution
+        functions its material's programs use); ``emits``, ``volume``, ``thin_walled``,
+        ``cutout``.
+    """
+    out = []
+    for obj, st in zip(scene.objects, geometry_stats, strict=True):
+        m = obj.material
+        field_ = obj.original_displacement or obj.displacement
+        if st.get("diced"):
+            err = st.get("max_error_px")
+            geometry = (f"diced: {st['triangles']:,} triangles"
+                        + (f", within {err:.2g} px" if err is not None else ""))
+        elif field_ is not None:
+            geometry = (f"base mesh: {st['triangles']:,} triangles (displacement as "
+                        f"{obj.displacement_method.replace('_', ' ')})")
+        else:
+            geometry = f"base mesh: {st['triangles']:,} triangles (not displaced)"
+        if st.get("not_diced"):
+            geometry = (f"base mesh: {st['triangles']:,} triangles (not diced: "
+                        f"{st['not_diced']})")
+        dfs = _df_names(getattr(m.surface, "scattering", None))
+        if not m.backface.is_default:
+            dfs |= _df_names(m.backface.scattering)
+        emission = getattr(m.surface.emission, "emission", None)
+        dfs |= _df_names(emission)
+        volume = m.volume
+        has_volume = volume.scattering is not None or any(
+            callable(c) or np.any(np.asarray(c, dtype=float) > 0)
+            for c in (volume.absorption_coefficient, volume.scattering_coefficient))
+        cutout = m.geometry.cutout_opacity
+        out.append({
+            "name": obj.name,
+            "geometry": geometry,
+            "triangles": int(st["triangles"]),
+            "diced": bool(st.get("diced")),
+            "displacement": (obj.displacement_method if field_ is not None else "none"),
+            "normal": ("evaluated (bump)" if m.geometry.normal is not None else
+                       "interpolated (no bump)"),
+            "dfs": sorted(dfs) or ["none (black)"],
+            "emits": emission is not None,
+            "volume": bool(has_volume),
+            "thin_walled": bool(m.thin_walled),
+            "cutout": bool(callable(cutout) or np.any(np.asarray(cutout, dtype=float) < 1)),
+        })
+    return out
 
 
 # ------------------------------------------------------------------------------ parsing
@@ -585,6 +772,73 @@ def _in_multiline_string(text: str, pos: int) -> bool:
     """Whether ``pos`` is inside a ''' or \"\"\" string (counts delimiters before it)."""
     before = text[:pos]
     return (before.count('"""') % 2 == 1) or (before.count("'''") % 2 == 1)
+
+
+def _toml_value(v) -> str:
+    """A TOML literal for a bool, number, string or list of them."""
+    import json
+
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | np.integer):
+        return str(int(v))
+    if isinstance(v, float | np.floating):
+        if not math.isfinite(v):
+            raise ValueError(f"a scene value must be finite, got {v!r}")
+        return repr(float(v))
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise ValueError(f"cannot write {v!r} into a scene file")
+
+
+def patch_scene_text(text: str, render: dict | None = None,
+                     objects: dict[int, dict] | None = None) -> str:
+    """The scene file ``text`` with keys of its ``[render]`` table and of its
+    ``[[objects]]`` tables (by index) set: a key already there is replaced, a new one
+    added below the table's header; everything else (comments, materials) is kept.
+
+    Examples
+    --------
+    >>> text = "[render]\\nspp = 64 # converged\\n\\n[[objects]]\\nmaterial = 'x()'\\n"
+    >>> print(patch_scene_text(text, {"spp": 4}, {0: {"dicing_tolerance": 2.0}}), end="")
+    [render]
+    spp = 4
+    <BLANKLINE>
+    [[objects]]
+    dicing_tolerance = 2.0
+    material = 'x()'
+    """
+    lines = text.splitlines(keepends=True)
+    if lines and not lines[-1].endswith("\n"):
+        lines[-1] += "\n"
+    loc = _Locator(text)
+    edits = [("render", None, render or {})]
+    edits += [("objects", i, keys) for i, keys in sorted((objects or {}).items())]
+    missing = []
+    for name, index, keys in sorted(edits, key=lambda e: -loc.section(e[0], e[1])[0]):
+        if not keys:
+            continue
+        first, last = loc.section(name, index)
+        if not first:
+            if name != "render":
+                raise ValueError(f"the scene has no [[objects]] table number {index}")
+            missing.append(keys)
+            continue
+        pats = [re.compile(r"^\s*" + re.escape(k) + r"\s*=") for k in keys]
+        start = sum(len(ln) for ln in lines[:first])
+        body = []
+        pos = start
+        for ln in lines[first:last]:
+            if not (any(p.match(ln) for p in pats) and not _in_multiline_string(text, pos)):
+                body.append(ln)
+            pos += len(ln)
+        new = [f"{k} = {_toml_value(v)}\n" for k, v in keys.items()]
+        lines[first:last] = new + body
+    for keys in missing:
+        lines += ["\n[render]\n"] + [f"{k} = {_toml_value(v)}\n" for k, v in keys.items()]
+    return "".join(lines)
 
 
 def load_scene(path, overrides: dict | None = None, profile_dirs=()) -> Scene:
@@ -736,9 +990,12 @@ class _Parser:
             if not isinstance(v, list) or not all(isinstance(x, dict) for x in v):
                 raise self._shape_error(name, f"{name} must be tables, each under a "
                                               f"[[{name}]] line (two brackets)")
+        from render.library.resources import evaluation
+
         settings = self.settings(self.data.get("render", {}), overrides)
         camera = self.camera(self.data.get("camera", {}), settings)
-        objects = [self.object(o, i) for i, o in enumerate(self.data.get("objects", []))]
+        with evaluation(settings.curves, settings.curve_tolerance, settings.texture_filter):
+            objects = [self.object(o, i) for i, o in enumerate(self.data.get("objects", []))]
         if not objects:
             raise SceneError("the scene has no [[objects]]", self.path, 1, 0)
         lights: list[Light] = []
@@ -765,6 +1022,11 @@ class _Parser:
             "dicing_rate",
             "dicing_tolerance",
             "spp_per_pass",
+            "curves",
+            "curve_tolerance",
+            "texture_filter",
+            "denoise",
+            "dice_invisible",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -791,6 +1053,11 @@ class _Parser:
             "time",
             "dicing_rate",
             "dicing_tolerance",
+            "curves",
+            "curve_tolerance",
+            "texture_filter",
+            "denoise",
+            "dice_invisible",
         ):
             if key in t:
                 setattr(s, key, t[key])
@@ -989,6 +1256,11 @@ class _Parser:
             "rotate",
             "scale",
             "resolution",
+            "dicing_rate",
+            "dicing_tolerance",
+            "displacement_method",
+            "normal_map_size",
+            "normal_map_bits",
         }
         self._check_keys(t, allowed, "objects", i)
         if ("surface" in t) == ("mesh" in t):
@@ -1011,6 +1283,19 @@ class _Parser:
                 f"objects[{i}]: resolution must be [nu, nv] cells", "objects", i, "resolution"
             )
         name = t.get("name", f"object{i}")
+        dicing = {k: self._num(t, k, "objects", i, positive=True)
+                  for k in ("dicing_rate", "dicing_tolerance")}
+        method = t.get("displacement_method", "displacement")
+        written = material.geometry.displacement
+        try:
+            from render.displacement_method import apply
+
+            material = apply(material, surface, method, t.get("normal_map_size", 512),
+                             t.get("normal_map_bits", 16))
+        except ValueError as e:
+            key = next((k for k in ("normal_map_bits", "normal_map_size") if k in str(e)),
+                       "displacement_method")
+            raise self.error(f"objects[{i}]: {e}", "objects", i, key) from None
         return SceneObject(
             surface,
             material,
@@ -1018,6 +1303,9 @@ class _Parser:
             str(name),
             tuple(res) if res else None,
             t["material"],
+            displacement_method=method,
+            original_displacement=written if method != "displacement" else None,
+            **dicing,
         )
 
     def light(self, t: dict, i: int):
@@ -1128,7 +1416,7 @@ class _Parser:
 
                 surface = UVSphere(self._num(t, "radius", sec, i, 0.25, positive=True))
             transform = make_transform(translate=center) if kind == "sphere" else np.eye(4)
-            return None, SceneObject(
+            obj = SceneObject(
                 surface,
                 emissive_material(intensity),
                 transform,
@@ -1136,6 +1424,14 @@ class _Parser:
                 (48, 24) if kind == "sphere" else None,
                 f"emissive(intensity: {intensity.tolist()})",
             )
+            if not _triangle_area(obj) > 0.0:
+                key = "size" if kind == "quad" else "radius"
+                raise self.error(
+                    f"lights[{i}]: this {kind} light has no area in double precision: its "
+                    f"{key} is so small that the area underflows to 0 or the corners round "
+                    f"to the same points (below ~1e-15 of its distance from the origin); "
+                    f"make it larger, or use a point light", sec, i, key)
+            return None, obj
         except SceneError:
             raise
         except ValueError as e:

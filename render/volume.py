@@ -367,7 +367,9 @@ def is_closed(vertices: np.ndarray, faces: np.ndarray, tolerance: float = 1e-7) 
     if len(f) == 0:
         return False
     size = float(np.ptp(v, axis=0).max()) or 1.0
-    key = np.round(v / (tolerance * size)).astype(np.int64)
+    # offsets from the mesh's corner, so the keys stay below 1 / tolerance however far
+    # the mesh is from the origin (1e12 away, v / size alone overflows int64)
+    key = np.round((v - v.min(axis=0)) / (tolerance * size)).astype(np.int64)
     _, weld = np.unique(key, axis=0, return_inverse=True)
     g = weld.ravel()[f]
     good = (g[:, 0] != g[:, 1]) & (g[:, 1] != g[:, 2]) & (g[:, 0] != g[:, 2])

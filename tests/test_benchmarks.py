@@ -19,11 +19,13 @@ BENCHMARKS = {
     "embree_calls.py": ["--quick"],
     "gallery_speed.py": ["--quick"],
     "cluster_speed.py": ["--quick"],
+    "invisible_displacement.py": ["--quick"],
+    "displaced_vs_mitsuba.py": ["--quick"],
 }
 
 
 #: benchmarks that need Mitsuba's LLVM back end (skipped with the reason without it)
-NEEDS_MITSUBA = {"render_vs_mitsuba.py"}
+NEEDS_MITSUBA = {"render_vs_mitsuba.py", "displaced_vs_mitsuba.py"}
 
 
 @pytest.mark.slow

@@ -32,7 +32,7 @@ from displacement.dice.mesh import DicedMesh, DicingCapWarning, DicingWarning
 from displacement.dice.parametric import dice_parametric
 
 __all__ = ["DicedMesh", "DicingCapWarning", "DicingWarning", "dice", "screen_error",
-           "locate_uv", "is_mesh_surface"]
+           "locate_uv", "is_mesh_surface", "displacement_on_screen"]
 
 
 def is_mesh_surface(surface) -> bool:
@@ -155,6 +155,69 @@ def dice(surface, field, camera: Camera, transform=None, dicing_rate: float = 1.
                  diced=field is not None, nonfinite_displacements=ds.nonfinite)
     object.__setattr__(mesh, "stats", stats)
     return mesh
+
+
+def displacement_on_screen(surface, field, camera: Camera, transform=None,
+                           samples: int = 65, margin_px: float = 8.0,
+                           stop_above: float | None = None) -> tuple[float, bool]:
+    """How far a displacement moves a parametric surface on screen, and whether the
+    displaced surface can be in view: what decides if dicing it can show anything.
+
+    The field is sampled on a 17 x 17 grid of uv, then on a ``samples`` x ``samples`` one
+    (the dicer's pilot grid), both with the field's knot lines.  With ``stop_above``, a
+    grid that already shows a displacement longer than that, in view, ends the search:
+    the common case (a visible relief) costs one small grid.
+
+    Returns
+    -------
+    pixels : float
+        The largest screen length of a sampled displacement vector (world length times
+        :meth:`Camera.raster_scale`, the larger of its two ends).  Where it is under the
+        dicing tolerance, the undisplaced surface is already within the tolerance of the
+        displaced one.
+    in_view : bool
+        False only when every sample, displaced or not, lies behind the camera, or in
+        front of it and beyond one edge of the image (grown by ``margin_px``): then the
+        convex hull of the samples, and the surface, is out of the frustum.
+
+    Examples
+    --------
+    >>> from displacement.surfaces import UnitSquare
+    >>> cam = Camera(position=(0.5, 0.5, 2.0), look_at=(0.5, 0.5, 0.0), width=64, height=64,
+    ...              ortho_height=2.0)
+    >>> up = lambda s: np.tile([0.0, 0.0, 0.01], (len(s), 1))  # 0.01 units = 0.32 px
+    >>> px, seen = displacement_on_screen(UnitSquare(), up, cam)
+    >>> round(px, 6), seen
+    (0.32, True)
+    >>> aside = np.eye(4)
+    >>> aside[0, 3] = 40.0                                     # moved 40 units aside
+    >>> displacement_on_screen(UnitSquare(), up, cam, aside)[1]
+    False
+    """
+    knots_u, knots_v = getattr(field, "uv_knots", (None, None))
+    transform = np.eye(4) if transform is None else transform
+    ds = DisplacedSurface(surface, field, transform, camera, 1.0, 1.0, 1.0)
+    w, h, m = camera.width, camera.height, float(margin_px)
+    pixels, in_view = 0.0, True
+    for n in (17, max(17, int(samples))):
+        grid = np.linspace(0.0, 1.0, n)
+        u = np.unique(np.concatenate([grid, np.asarray(knots_u if knots_u is not None else [])]))
+        v = np.unique(np.concatenate([grid, np.asarray(knots_v if knots_v is not None else [])]))
+        state = surface.state_at_uv(np.stack(np.meshgrid(u, v), axis=-1).reshape(-1, 2))
+        base = ds.to_world(state.position)
+        moved = ds.to_world(ds._displace(state))
+        scale = np.maximum(camera.raster_scale(base), camera.raster_scale(moved))
+        pixels = max(pixels, float(np.max(np.linalg.norm(moved - base, axis=1) * scale)))
+        if stop_above is not None and pixels > stop_above and np.any(
+                camera.in_frustum(moved, m)):
+            return pixels, True
+        both = np.concatenate([base, moved])
+        xy, depth = camera.project(both)
+        out = bool(np.all(depth <= 0.0)) or (bool(np.all(depth > 0.0)) and any(
+            np.all(test) for test in (xy[:, 0] < -m, xy[:, 0] > w + m, xy[:, 1] < -m,
+                                      xy[:, 1] > h + m)))
+        in_view = not out
+    return pixels, in_view
 
 
 def screen_error(mesh: DicedMesh, surface, field, camera: Camera, transform=None,

@@ -97,7 +97,7 @@ def _error(message: str, status: int) -> int:
 def run(args) -> int:
     """Execute ``pwc render`` with parsed arguments; returns the exit status."""
     from render.distributed import ClusterError, cluster, render_on_cluster
-    from render.film import AOVS
+    from render.film import AOVS, check_film_memory
     from render.integrator import render
     from render.scene import SceneError, SceneReadError, load_scene
 
@@ -119,7 +119,8 @@ def run(args) -> int:
         return _error(f"the output must be an .exr file, got {args.output!r}", EXIT_USAGE)
     if args.png and not str(args.png).lower().endswith(".png"):
         return _error(f"--png must name a .png file, got {args.png!r}", EXIT_USAGE)
-    if args.denoise:
+    denoise = args.denoise
+    if denoise:
         try:
             import pyoidn  # noqa: F401
         except ImportError:
@@ -145,6 +146,11 @@ def run(args) -> int:
             scene.camera = dataclasses.replace(
                 scene.camera, width=args.resolution[0], height=args.resolution[1]
             )
+        denoise = denoise or scene.settings.denoise  # --denoise, or denoise = true
+        if denoise:
+            import pyoidn  # noqa: F401 - raises ImportError (reported below) when missing
+        # an image too large for memory is refused before the scene is diced
+        check_film_memory(scene.camera.width, scene.camera.height, aovs, denoise)
         if not args.quiet:
             _notice_first_compile()
         # a bar redrawn with carriage returns only on a terminal, not into a log
@@ -152,11 +158,11 @@ def run(args) -> int:
         if args.scheduler or args.workers:
             with cluster(args.scheduler, args.workers, args.threads or 1) as client:
                 film = render_on_cluster(scene, client, aovs=aovs, progress=progress,
-                                         denoise=args.denoise,
+                                         denoise=denoise,
                                          chunks_per_task=args.chunks_per_task)
         else:
             film = render(scene, aovs=aovs, progress=progress, threads=args.threads or 2,
-                          denoise=args.denoise)
+                          denoise=denoise)
     except ClusterError as e:
         return _error(str(e), EXIT_IO)
     except SceneReadError as e:
@@ -194,7 +200,32 @@ def run(args) -> int:
             f"{st['triangles']} triangles{shaded})",
             file=sys.stderr,
         )
+        for line in modelling_lines(scene, st["geometry"], aovs):
+            print(line, file=sys.stderr)
     return EXIT_OK
+
+
+def modelling_lines(scene, geometry_stats, aovs) -> list[str]:
+    """What was modelled, one line per object, then the lights, volumes and AOVs (the
+    render summary of ``pwc render``)."""
+    from render.scene import modelling_summary
+
+    summary = modelling_summary(scene, geometry_stats)
+    lines = []
+    for m in summary:
+        notes = [m["displacement"].replace("_", " ") if m["displacement"] not in (
+            "none", "displacement") else "",
+            "bumped normal" if m["normal"].startswith("evaluated") else "",
+            "emits" if m["emits"] else "", "volume" if m["volume"] else "",
+            "thin-walled" if m["thin_walled"] else "", "cutout" if m["cutout"] else ""]
+        lines.append(f"  {m['name']}: {m['geometry']}; "
+                     + ", ".join([x for x in notes if x] + m["dfs"]))
+    lights = [type(light).__name__ for light in scene.lights]
+    lights += [f"area ({m['name']})" for m in summary if m["emits"]]
+    volumes = "on" if any(m["volume"] for m in summary) else "none"
+    lines.append(f"  lights: {', '.join(lights) or 'none'}; volumes: {volumes}; "
+                 f"AOVs: {', '.join(aovs) or 'none'}")
+    return lines
 
 
 def _scene_file(arg: str) -> Path:

@@ -15,6 +15,7 @@ modification time, so a material built many times loads each file once (MDL's
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import os
 from collections.abc import Iterator, Sequence
@@ -41,6 +42,10 @@ __all__ = [
     "find_texture",
     "load_texture",
     "INVALID_TEXTURE",
+    "CURVE_MODES",
+    "evaluation",
+    "track_loads",
+    "with_filter",
 ]
 
 ROOT = Path(__file__).resolve().parents[2]  # the checkout, or site-packages when installed
@@ -81,6 +86,14 @@ _PROFILE_DIRS: ContextVar[_Dirs] = ContextVar("profile_dirs", default=())
 _TEXTURE_DIRS: ContextVar[_Dirs] = ContextVar("texture_dirs", default=DEFAULT_TEXTURE_DIRS)
 _CURVES: dict = {}
 _TEXTURES: dict = {}
+#: how loaded profiles are evaluated, and loaded textures filtered (a scene's ``[render]``
+#: ``curves``, ``curve_tolerance`` and ``texture_filter``; :func:`evaluation`)
+_CURVE_MODE: ContextVar[tuple[str, float]] = ContextVar("curve_mode", default=("exact", 0.0))
+#: where :func:`track_loads` collects the profiles and textures loaded in its block
+_LOADED: ContextVar[dict | None] = ContextVar("loaded", default=None)
+_TEXTURE_FILTER: ContextVar[str] = ContextVar("texture_filter", default="bilinear")
+#: the ways a profile may be evaluated (``[render] curves``), most accurate first
+CURVE_MODES = ("exact", "float32", "polyline")
 
 
 def _as_dirs(dirs: Sequence[str | os.PathLike] | str | os.PathLike) -> tuple[Path, ...]:
@@ -110,6 +123,58 @@ def search_paths(profile_dirs=None, texture_dirs=None) -> Iterator[None]:
     finally:
         for var, token in reversed(tokens):
             var.reset(token)
+
+
+@contextmanager
+def evaluation(curves: str = "exact", curve_tolerance: float = 1e-4,
+               texture_filter: str = "bilinear") -> Iterator[None]:
+    """Inside the block, profiles load as ``curves`` says and textures with
+    ``texture_filter`` (materials are built, and these resources loaded, when a scene is
+    read; the render then uses what was loaded).
+
+    Parameters
+    ----------
+    curves : {"exact", "float32", "polyline"}
+        Exact arcs in float64 (the default); the same in float32 (MDL's ``float``); or
+        the polyline within ``curve_tolerance`` of the curve (:meth:`pwc.Curve.as_polyline`).
+    curve_tolerance : float
+        Of ``"polyline"``, in the curve's normalized units.
+    texture_filter : {"bilinear", "nearest"}
+    """
+    from displacement.textures import FILTERS
+
+    if curves not in CURVE_MODES:
+        raise ValueError(f"curves must be one of {', '.join(CURVE_MODES)}, got {curves!r}")
+    if not (isinstance(curve_tolerance, int | float) and curve_tolerance > 0):
+        raise ValueError(f"curve_tolerance must be a number > 0, got {curve_tolerance!r}")
+    if texture_filter not in FILTERS:
+        raise ValueError(f"texture_filter must be one of {', '.join(FILTERS)}, got "
+                         f"{texture_filter!r}")
+    t1 = _CURVE_MODE.set((curves, float(curve_tolerance)))
+    t2 = _TEXTURE_FILTER.set(texture_filter)
+    try:
+        yield
+    finally:
+        _TEXTURE_FILTER.reset(t2)
+        _CURVE_MODE.reset(t1)
+
+
+@contextmanager
+def track_loads() -> Iterator[dict]:
+    """Collect the names of the profiles and textures loaded inside the block:
+    ``{"profiles": set, "textures": set}`` (what a scene's materials use)."""
+    loaded: dict = {"profiles": set(), "textures": set()}
+    token = _LOADED.set(loaded)
+    try:
+        yield loaded
+    finally:
+        _LOADED.reset(token)
+
+
+def _note(kind: str, name: str) -> None:
+    loaded = _LOADED.get()
+    if loaded is not None:
+        loaded[kind].add(name)
 
 
 def profile_dirs() -> tuple[Path, ...]:
@@ -163,10 +228,19 @@ def load_profile(name: str):
             f"{', '.join(str(d) for d in profile_dirs())}",
             f"did you mean {hint[0]!r}?" if hint else None,
         )
+    _note("profiles", name)
+    mode, tolerance = _CURVE_MODE.get()
     key = (path.resolve(), path.stat().st_mtime_ns)
     if key not in _CURVES:
         _CURVES[key] = pwc.load(path)
-    return _CURVES[key]
+    if mode == "exact":
+        return _CURVES[key]
+    variant = (*key, mode, tolerance if mode == "polyline" else 0.0)
+    if variant not in _CURVES:
+        curve = _CURVES[key]
+        _CURVES[variant] = curve.in_float32() if mode == "float32" else curve.as_polyline(
+            tolerance)
+    return _CURVES[variant]
 
 
 def find_texture(file: str, base_dir=None) -> Path | None:
@@ -213,10 +287,22 @@ def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
             f"texture {file!r} not found in {', '.join(str(d) for d in dirs)}",
             f"did you mean {hint[0]!r}?" if hint else None,
         )
+    _note("textures", file)
     key = (path.resolve(), path.stat().st_mtime_ns, gamma)
     if key not in _TEXTURES:
         try:
             _TEXTURES[key] = read_texture(path, gamma=gamma)
         except (OSError, ValueError) as e:
             raise ResourceError(f"cannot read texture {str(path)!r}: {e}") from None
-    return _TEXTURES[key]
+    return with_filter(_TEXTURES[key])
+
+
+def with_filter(texture: Texture) -> Texture:
+    """``texture`` filtered as the current :func:`evaluation` block says (cached)."""
+    wanted = _TEXTURE_FILTER.get()
+    if texture.filter == wanted:
+        return texture
+    key = (id(texture), wanted)
+    if key not in _TEXTURES or _TEXTURES[key][0] is not texture:
+        _TEXTURES[key] = (texture, dataclasses.replace(texture, filter=wanted))
+    return _TEXTURES[key][1]

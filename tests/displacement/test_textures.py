@@ -391,3 +391,16 @@ def test_weave_normal_map_is_the_normal_of_the_height_map():
     # the two differ at fibre creases (kinks of max()); measured median 0.12, mean 3.8 degrees
     assert np.median(angles) < 0.5
     assert angles.mean() < 5.0
+
+
+def test_a_texture_filters_as_it_was_told():
+    data = np.array([[0.0, 1.0], [2.0, 3.0]])
+    uv = np.array([[0.3, 0.7], [0.6, 0.4]])
+    bilinear = T.Texture(data)
+    nearest = T.Texture(data, filter="nearest")
+    assert bilinear.filter == "bilinear"  # MDL's default
+    np.testing.assert_array_equal(nearest.lookup(uv), bilinear.lookup(uv, filter="nearest"))
+    assert not np.array_equal(nearest.lookup(uv), bilinear.lookup(uv))
+    np.testing.assert_array_equal(nearest.lookup(uv, filter="bilinear"), bilinear.lookup(uv))
+    with pytest.raises(ValueError, match="filter must be one of nearest, bilinear"):
+        T.Texture(data, filter="trilinear")

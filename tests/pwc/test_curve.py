@@ -3,6 +3,8 @@ derivatives, the arc-length inverse, polylines, and properties over generated li
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -167,3 +169,33 @@ def test_lookup_table_search_equals_listing_15_5_search(n):
         expect = np.searchsorted(tab.t[:-1], ss, side="right")  # first t exceeding s
         expect[ss < 0] = 0
         np.testing.assert_array_equal(i, expect)
+
+
+# -- the trade knobs: polylines and float32 (pwc trade, [render] curves) ------------------
+@pytest.mark.parametrize("tolerance", [1e-2, 1e-4])
+def test_as_polyline_is_a_curve_of_segments_within_the_tolerance(tolerance):
+    c = compile_text("0 0\n1 0\n1 1 :angle 90\n0 2 :sag .4\n0 3 :cyma_recta")
+    p = c.as_polyline(tolerance)
+    assert np.all(p.type == 0) and np.all(np.diff(p.t) > 0) and p.n > c.n
+    assert p.scale == c.scale and p.name == c.name
+    # every vertex lies on the curve; every chord midpoint within the tolerance of it
+    dense = c.evaluate(np.linspace(0.0, 1.0, 200_001))
+    mid = 0.5 * (p.pt[1:] + p.pt[:-1])
+    dist = np.min(np.linalg.norm(mid[:, None, :] - dense[None, ::50, :], axis=2), axis=1)
+    assert dist.max() <= tolerance + 2e-4  # the dense sampling's own spacing
+    # parametrized by its own arc length, slightly shorter than the arcs
+    assert p.length == pytest.approx(np.linalg.norm(np.diff(p.pt, axis=0), axis=1).sum())
+    assert c.length * (1 - 10 * tolerance) < p.length <= c.length
+
+
+def test_in_float32_evaluates_as_mdl_float_and_returns_float64():
+    c = compile_text("0 0\n1 0\n1 1 :angle 90")
+    s = np.linspace(0.0, 1.0, 1001)
+    f32 = c.in_float32()
+    assert f32.precision == "float32" and c.precision == "float64"
+    out = f32.evaluate(s)
+    assert out.dtype == np.float64
+    np.testing.assert_array_equal(out, c.evaluate(s.astype(np.float32)).astype(np.float64))
+    assert np.abs(out - c.evaluate(s)).max() < 1e-6
+    with pytest.raises(ValueError, match="precision must be"):
+        dataclasses.replace(c, precision="float16")
