@@ -17,7 +17,7 @@ PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
 def test_every_package_is_listed():
     listed = set(PYPROJECT["tool"]["setuptools"]["packages"])
     on_disk = {".".join(p.parent.relative_to(ROOT).parts)
-               for top in ("pwc", "displacement", "render")
+               for top in ("pwc", "displacement", "render", "gallery")
                for p in (ROOT / top).rglob("__init__.py")}
     assert on_disk <= listed, f"add to pyproject.toml's packages: {sorted(on_disk - listed)}"
     mapped = PYPROJECT["tool"]["setuptools"]["package-dir"]
