@@ -140,8 +140,10 @@ def run_render(args) -> int:
         except ImportError:
             return _error("--denoise needs Open Image Denoise: pip install pyoidn", EXIT_USAGE)
     out = Path(args.output)
-    try:
-        prepare_output(str(out) + "/", "the output folder")
+    try:  # every output is checked before the first render starts
+        for fig in figs:
+            for ext in ("exr", "png"):
+                prepare_output(out / f"{fig.name}.{ext}", "the image")
     except OutputError as e:
         return _error(str(e), EXIT_IO)
     for fig in figs:
@@ -212,7 +214,9 @@ def run_check(args) -> int:
         return status
     if args.save:
         try:
-            prepare_output(str(args.save) + "/", "the --save folder")
+            for fig in figs:
+                for tag in ("img", "ref", "err"):
+                    prepare_output(Path(args.save) / f"{fig.name}_{tag}.exr", "--save image")
         except OutputError as e:
             return _error(str(e), EXIT_IO)
     results, _ = _checked(args, figs)
