@@ -3,7 +3,8 @@
 One rule, used by ``tests/gallery`` and by ``pwc gallery check``:
 
 * render the figure at its test resolution (:attr:`gallery.figures.Figure.test_resolution`)
-  with :data:`TEST_SPP` samples per pixel and seed :data:`TEST_SEED`;
+  with :data:`TEST_SPP` samples per pixel and seed :data:`TEST_SEED`, its displaced
+  objects diced as for the reference (:func:`render_figure`);
 * average the reference down to that size (:func:`downsample`: each test pixel is the mean
   of the reference pixels it covers, which a box-filtered render estimates too);
 * the render passes when its RMSE (linear) and mean FLIP (LDR, on the sRGB encodings) are
@@ -119,13 +120,22 @@ def errors(test: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
 def render_figure(figure: Figure, spp: int | None, seed: int, resolution=None,
                   progress: bool = False, denoise: bool = False, time: float | None = None):
     """Render a figure's scene to a Film: at ``resolution`` (default: its test size),
-    ``spp`` samples per pixel or for ``time`` seconds (default: the scene's)."""
+    ``spp`` samples per pixel or for ``time`` seconds (default: the scene's).
+
+    The test image is diced as the reference is: displaced objects are tessellated for
+    the reference's pixels (the scene's dicing rate and tolerance divided by
+    :attr:`~gallery.figures.Figure.factor`), so the two images show the same triangles
+    and differ by noise alone.  Other sizes are diced for their own pixels.
+    """
     from render.integrator import render
     from render.scene import load_scene
 
     w, h = resolution or figure.test_resolution
     scene = load_scene(figure.scene, overrides={"width": w, "height": h, "spp": spp,
                                                 "time": time, "seed": seed})
+    if (w, h) == figure.test_resolution and figure.factor > 1:
+        scene.settings.dicing_rate /= figure.factor
+        scene.settings.dicing_tolerance /= figure.factor
     return render(scene, progress=progress, denoise=denoise)
 
 

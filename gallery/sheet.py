@@ -9,7 +9,8 @@ reference was made.  Figures are grouped by part and chapter, in the Handbook's 
 The page's images are files beside it (``sheet/NAME.png``, ``sheet/NAME_flip.png``;
 references linked where they are).  A script at the end of the page counts the images
 the browser decoded and writes the count into ``<body data-images-loaded="N/M">``, so a
-headless browser's ``--dump-dom`` shows whether every image loaded (``tests/gallery``).
+headless browser's ``--dump-dom`` shows whether every image loaded, and marks an image
+that did not with a magenta frame a screenshot shows (``tests/gallery/test_sheet.py``).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ figure.failed { border: 2px solid #b00020; }
 .images div { text-align: center; font-size: 0.85em; color: #555; }
 .images img { width: 384px; height: 288px; object-fit: contain; image-rendering: pixelated;
   display: block; background: #000; }
+img.broken { outline: 8px solid #ff00ff; outline-offset: -8px; }
 figcaption code { background: #f0f0f0; padding: 0 0.2em; }
 .notes { color: #555; font-size: 0.9em; max-width: 70em; }
 table.numbers { border-collapse: collapse; font-size: 0.85em; margin-top: 0.5em; }
