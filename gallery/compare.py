@@ -45,6 +45,7 @@ __all__ = [
     "srgb",
     "errors",
     "flip_map",
+    "figure_scene",
     "render_figure",
     "judge",
     "check",
@@ -117,17 +118,16 @@ def errors(test: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
     return rmse, flip_map(test, ref)[1]
 
 
-def render_figure(figure: Figure, spp: int | None, seed: int, resolution=None,
-                  progress: bool = False, denoise: bool = False, time: float | None = None):
-    """Render a figure's scene to a Film: at ``resolution`` (default: its test size),
-    ``spp`` samples per pixel or for ``time`` seconds (default: the scene's).
+def figure_scene(figure: Figure, resolution=None, spp: int | None = None,
+                 seed: int | None = None, time: float | None = None):
+    """A figure's :class:`~render.scene.Scene` at ``resolution`` (default: its test size),
+    ``spp`` samples per pixel or ``time`` seconds (default: the scene's).
 
     The test image is diced as the reference is: displaced objects are tessellated for
     the reference's pixels (the scene's dicing rate and tolerance divided by
     :attr:`~gallery.figures.Figure.factor`), so the two images show the same triangles
     and differ by noise alone.  Other sizes are diced for their own pixels.
     """
-    from render.integrator import render
     from render.scene import load_scene
 
     w, h = resolution or figure.test_resolution
@@ -136,6 +136,15 @@ def render_figure(figure: Figure, spp: int | None, seed: int, resolution=None,
     if (w, h) == figure.test_resolution and figure.factor > 1:
         scene.settings.dicing_rate /= figure.factor
         scene.settings.dicing_tolerance /= figure.factor
+    return scene
+
+
+def render_figure(figure: Figure, spp: int | None, seed: int, resolution=None,
+                  progress: bool = False, denoise: bool = False, time: float | None = None):
+    """Render :func:`figure_scene` to a Film."""
+    from render.integrator import render
+
+    scene = figure_scene(figure, resolution, spp, seed, time)
     return render(scene, progress=progress, denoise=denoise)
 
 

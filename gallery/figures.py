@@ -200,10 +200,10 @@ def figures(patterns=(), folder: str | Path | None = None) -> list[Figure]:
     --------
     >>> [f.number for f in figures(["13.14", "fig_14_2?"])][:3]
     ['13.14', '14.20', '14.21']
-    >>> figures(["99"])
+    >>> figures(["99"])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    gallery.figures.FigureError: no gallery figure matches '99' (give a chapter such as 13, a figure such as 13.14, a scene name such as fig_13_14 or a glob such as 'fig_12_*')
+    gallery.figures.FigureError: no gallery figure matches '99' (give a chapter such as 13, ...
     """
     folder = Path(folder) if folder is not None else scenes_dir()
     every = sorted((read_figure(p) for p in folder.glob("fig_*.toml")), key=Figure.sort_key)

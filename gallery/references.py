@@ -139,14 +139,13 @@ def make_reference(figure: Figure, target: float = NOISE_TARGET, max_spp: int = 
     facts for the table's ``"reference"`` entry."""
     from render.film import write_exr_channels, write_png_rgb
     from render.integrator import Integrator
-    from render.scene import load_scene
 
     folder = folder or compare.reference_dir()
     w, h = figure.resolution
     # a power of two, so that a power-of-two max_spp is a whole number of batches
     batch_spp = 1 << max(0, min(BATCH_SAMPLES // (w * h), max_spp // MIN_BATCHES).bit_length() - 1)
     t0, c0 = time.perf_counter(), time.process_time()
-    scene = load_scene(figure.scene)
+    scene = compare.figure_scene(figure, figure.resolution)
     integrator = Integrator(scene, scene.build())
     batches = Batches((h, w, 3))
     bar = None
@@ -190,10 +189,14 @@ def make_reference(figure: Figure, target: float = NOISE_TARGET, max_spp: int = 
 def calibrate(figure: Figure, folder: Path | None = None) -> dict:
     """Measure the regression rule's errors at :data:`gallery.compare.CALIBRATION_SEEDS`
     against the stored reference; return the table's ``"test"`` entry."""
+    from render.integrator import Integrator
+
     ref = compare.downsample(compare.read_reference(figure.name, folder), figure.factor)
+    scene = compare.figure_scene(figure)  # as the test renders it, built once
+    integrator = Integrator(scene, scene.build())
     rmse, flip, means = [], [], []
     for seed in compare.CALIBRATION_SEEDS:
-        img = compare.render_figure(figure, compare.TEST_SPP, seed).rgb()
+        img = integrator.render(spp=compare.TEST_SPP, seed=seed, progress=False).rgb()
         r, f = compare.errors(img, ref)
         rmse.append(round(r, 6))
         flip.append(round(f, 6))

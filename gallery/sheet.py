@@ -30,9 +30,12 @@ __all__ = ["write_sheet", "error_map_rgb", "STYLE"]
 
 STYLE = """
 body { font: 14px/1.4 system-ui, sans-serif; margin: 1.5em; color: #222; background: #fafafa; }
-h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 1.6em; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; }
+h2 { margin-top: 1.6em; }
 h4 { margin: 0 0 0.4em; }
-.summary { margin: 0.6em 0 1em; } .pass { color: #176b2c; } .fail { color: #b00020; font-weight: bold; }
+.summary { margin: 0.6em 0 1em; }
+.pass { color: #176b2c; }
+.fail { color: #b00020; font-weight: bold; }
 figure { margin: 0 0 1.2em; padding: 0.8em; background: #fff; border: 1px solid #ddd; }
 figure.failed { border: 2px solid #b00020; }
 .images { display: flex; gap: 0.8em; flex-wrap: wrap; }
@@ -43,7 +46,8 @@ img.broken { outline: 8px solid #ff00ff; outline-offset: -8px; }
 figcaption code { background: #f0f0f0; padding: 0 0.2em; }
 .notes { color: #555; font-size: 0.9em; max-width: 70em; }
 table.numbers { border-collapse: collapse; font-size: 0.85em; margin-top: 0.5em; }
-table.numbers td, table.numbers th { border: 1px solid #ddd; padding: 0.15em 0.5em; text-align: left; }
+table.numbers td, table.numbers th { border: 1px solid #ddd; padding: 0.15em 0.5em;
+  text-align: left; }
 """
 
 _SCRIPT = """
@@ -52,7 +56,9 @@ window.addEventListener("load", function () {
   var images = Array.prototype.slice.call(document.images);
   var loaded = images.filter(function (i) { return i.complete && i.naturalWidth > 0; });
   document.body.setAttribute("data-images-loaded", loaded.length + "/" + images.length);
-  images.forEach(function (i) { if (!(i.complete && i.naturalWidth > 0)) i.classList.add("broken"); });
+  images.forEach(function (i) {
+    if (!(i.complete && i.naturalWidth > 0)) i.classList.add("broken");
+  });
 });
 </script>
 """
