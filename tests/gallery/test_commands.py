@@ -7,7 +7,6 @@ import shutil
 import tomllib
 
 import numpy as np
-import pytest
 from PIL import Image
 from repo import ROOT, run_pwc
 
@@ -66,7 +65,8 @@ def test_check_passes_the_gallerys_own_figure_and_prints_the_table(capsys, tmp_p
     assert "13.3" in out and "pass" in out and "1 of 1 figures pass" in out
     saved = read_exr(tmp_path / f"{NAME}_img.exr")["RGB"]
     assert saved.shape == (96, 128, 3)
-    assert {p.name for p in tmp_path.iterdir()} == {f"{NAME}_{t}.exr" for t in ("img", "ref", "err")}
+    expected = {f"{NAME}_{tag}.exr" for tag in ("img", "ref", "err")}
+    assert {p.name for p in tmp_path.iterdir()} == expected
 
 
 def _changed_references(folder, scale):

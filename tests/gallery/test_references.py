@@ -3,6 +3,8 @@ and a reference's stated noise against its real error from a converged render.""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -10,7 +12,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from gallery import compare, references
-from gallery.figures import read_figure
+from gallery.figures import read_figure, scenes_dir
 from render.film import linear_to_srgb
 
 KNEE = 0.0031308  # where the sRGB encoding turns from linear to a power
@@ -56,43 +58,13 @@ def test_display_noise_scales_with_the_standard_error(value, stderr, k):
     assert one == pytest.approx(255 * references.srgb_slope(np.array(value)) * stderr)
 
 
-SCENE = """# Figure 13.3 of the MDL Handbook: scaled_uv, small
-[camera]
-type = "pinhole"
-position = [0.0, 1.1, 3.6]
-look_at = [0.0, 0.45, 0.0]
-fov = 30.0
-
-[render]
-resolution = [128, 96]
-max_depth = 3
-
-[[lights]]
-type = "quad"
-center = [-2.2, 3.2, 2.2]
-normal = [0.55, -0.7, -0.45]
-size = [1.2, 1.2]
-radiance = [5.0, 5.0, 5.0]
-
-[[objects]]
-name = "floor"
-surface = { type = "plane", size = [8.0, 8.0], origin = [-4.0, 0.0, 4.0], axis_u = [1.0, 0.0, 0.0], axis_v = [0.0, 0.0, -1.0] }
-material = "diffuse(tint: color(0.45))"
-
-[[objects]]
-name = "sphere"
-surface = { type = "sphere", radius = 0.5 }
-translate = [0.0, 0.5, 0.0]
-material = "scaled_uv(u_scale: 8, v_scale: 4)"
-"""
-
-
 def test_a_references_stated_noise_is_its_error_against_a_converged_render(tmp_path):
     """A 16-spp reference states its noise from its batches; its error against a render
     with 8 times the samples, seen in 8-bit sRGB, is that noise (the converged render's
     own noise adds in quadrature)."""
-    path = tmp_path / "fig_13_03.toml"
-    path.write_text(SCENE)
+    path = tmp_path / "fig_13_03.toml"  # the gallery's Figure 13.3, at 128 x 96
+    scene = (scenes_dir() / path.name).read_text(encoding="utf-8")
+    path.write_text(re.sub(r"resolution = \[\d+, \d+\]", "resolution = [128, 96]", scene))
     fig = read_figure(path)
     facts = references.make_reference(fig, target=0.0, max_spp=16, folder=tmp_path,
                                       progress=False)
