@@ -46,6 +46,10 @@ def test_every_figure_has_a_reference_at_its_size_and_stated_noise():
         assert test["flip_max"] == pytest.approx(compare.MARGIN * max(test["flip"]), abs=1e-6)
 
 
+# The weave height map (Figures 12.17, 12.19-12.21) has cliffs where threads cross, which
+# keep the dicer refining until its triangle cap; it says so, and the reference was
+# diced the same way (the test image is diced as the reference: gallery.compare).
+@pytest.mark.filterwarnings("ignore::displacement.dice.mesh.DicingCapWarning")
 @pytest.mark.parametrize("fig", FIGURES, ids=[f.name for f in FIGURES])
 def test_figure_matches_its_reference(fig, tmp_path):
     outcome = compare.check(fig, TABLE)
