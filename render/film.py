@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["Film", "FilmPatch", "AOVS", "FilmTooLarge", "available_memory",
-           "check_film_memory", "empty_aovs", "film_bytes", "linear_to_srgb", "read_exr"]
+           "check_film_memory", "empty_aovs", "film_bytes", "linear_to_srgb", "read_exr",
+           "write_exr_channels", "write_png_rgb"]
 
 #: the AOVs a film can keep, and their channel names in the EXR.
 AOVS = {
@@ -262,8 +263,6 @@ class Film:
         half : bool
             Store colour and AOVs as 16-bit half floats (object ids stay 32-bit floats).
         """
-        import OpenEXR
-
         names = self.aov_names if aovs is None else list(aovs)
         dt = np.float16 if half else np.float32
         rgb = self.rgb()
@@ -280,19 +279,32 @@ class Film:
                 continue
             for c, ch in enumerate(AOVS[name]):
                 channels[f"{name}.{ch}"] = np.ascontiguousarray(val[..., c]).astype(dt)
-        channels = {k: np.ascontiguousarray(v) for k, v in channels.items()}
-        hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        with OpenEXR.File(hdr, channels) as f:
-            f.write(str(path))
+        write_exr_channels(path, channels)
 
     def write_png(self, path, exposure: float = 0.0) -> None:
         """Write an 8-bit sRGB preview (colour times ``2**exposure``, clamped)."""
-        from PIL import Image
+        write_png_rgb(path, self.rgb(), exposure)
 
-        img = linear_to_srgb(self.rgb() * 2.0**exposure)
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(np.round(img * 255.0).astype(np.uint8), "RGB").save(str(path))
+
+def write_exr_channels(path, channels: dict) -> None:
+    """Write named (h, w) channels (``R``, ``G``, ``B``, ``A``, ``layer.X``...) to an
+    OpenEXR file, ZIP-compressed, in the dtype each array has (float16 or float32)."""
+    import OpenEXR
+
+    channels = {k: np.ascontiguousarray(v) for k, v in channels.items()}
+    hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    with OpenEXR.File(hdr, channels) as f:
+        f.write(str(path))
+
+
+def write_png_rgb(path, rgb: np.ndarray, exposure: float = 0.0) -> None:
+    """Write linear (h, w, 3) colour as an 8-bit sRGB PNG (times ``2**exposure``, clamped)."""
+    from PIL import Image
+
+    img = linear_to_srgb(np.asarray(rgb) * 2.0**exposure)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(np.round(img * 255.0).astype(np.uint8), "RGB").save(str(path))
 
 
 

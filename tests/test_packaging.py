@@ -1,5 +1,6 @@
 """A non-editable install (``pip install .``) carries everything the commands find by
-name: the bundled profiles, the gallery's scenes and textures, the MDL runtime."""
+name: the bundled profiles, the gallery's scenes, textures and references, the MDL
+runtime."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
 def test_every_package_is_listed():
     listed = set(PYPROJECT["tool"]["setuptools"]["packages"])
     on_disk = {".".join(p.parent.relative_to(ROOT).parts)
-               for top in ("pwc", "displacement", "render", "trade")
+               for top in ("pwc", "displacement", "render", "trade", "gallery")
                for p in (ROOT / top).rglob("__init__.py")}
     assert on_disk <= listed, f"add to pyproject.toml's packages: {sorted(on_disk - listed)}"
     mapped = PYPROJECT["tool"]["setuptools"]["package-dir"]
@@ -37,6 +38,13 @@ for module in (pwc, render):
 assert site in bundled_scenes().resolve().parents and site in bundled_textures().resolve().parents
 scene = load_scene(bundled_scenes() / "fig_15_22.toml")
 assert load_texture("uv.png").data.shape[2] == 3
+import gallery
+from gallery.compare import read_reference, read_table, reference_dir
+from gallery.figures import figures
+assert site in pathlib.Path(gallery.__file__).resolve().parents
+assert site in reference_dir().resolve().parents
+assert set(read_table()) == {f.name for f in figures()}
+assert read_reference("fig_15_22").shape == (192, 256, 3)
 print("ok", len(scene.objects), bundled_scenes())
 """
 
@@ -68,5 +76,6 @@ def test_non_editable_install_finds_its_data_outside_the_source_tree(tmp_path):
     source = run("-m", "pwc", "info", "ornament_2").stdout.splitlines()[1].split(None, 1)[1]
     assert source == str(site / "pwc" / "profiles" / "ornament_2.pwc"), source
     assert run("-c", CHECK, str(site)).stdout.startswith("ok")
+    assert "{render,check,sheet}" in run("-m", "pwc", "gallery", "--help").stdout
     version = run("-m", "pwc", "--version").stdout.strip()
     assert version == f"pwc {PYPROJECT['project']['version']}"

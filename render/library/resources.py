@@ -32,6 +32,7 @@ __all__ = [
     "ROOT",
     "DEFAULT_TEXTURE_DIRS",
     "bundled_scenes",
+    "bundled_references",
     "bundled_textures",
     "search_paths",
     "profile_dirs",
@@ -65,6 +66,11 @@ def bundled_textures() -> Path:
 def bundled_scenes() -> Path:
     """The gallery's scene files (package data when installed)."""
     return _bundled("scenes")
+
+
+def bundled_references() -> Path:
+    """The gallery's reference images and thresholds (package data when installed)."""
+    return _bundled("reference")
 
 
 DEFAULT_TEXTURE_DIRS: tuple[Path, ...] = (bundled_textures(),)

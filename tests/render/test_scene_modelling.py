@@ -32,7 +32,8 @@ def test_patching_replaces_and_adds_keys_and_keeps_the_rest():
                             {1: {"dicing_tolerance": 2.0, "displacement_method": "bump"}})
     s = parse_scene(text, "s.toml")
     assert (s.settings.spp, s.settings.denoise, s.settings.curves) == (3, True, "float32")
-    assert s.settings.max_depth == 8 and s.settings.width == 128  # untouched
+    original = parse_scene(SCENE, "s.toml").settings
+    assert (s.settings.max_depth, s.settings.width) == (original.max_depth, original.width)
     assert s.objects[1].dicing_tolerance == 2.0 and s.objects[1].displacement_method == "bump"
     assert s.objects[0].dicing_tolerance is None
     assert text.count("spp =") == 1

@@ -413,4 +413,5 @@ def test_chapter_9_and_10_scenes_use_the_captions():
         if name.startswith(("fig_09_", "fig_10_")):
             calls = {" ".join(o["material"].split()) for o in scene["objects"]}
             assert calls - {"diffuse(tint: color(0.45))"} <= normalized, name
-            assert scene["render"]["resolution"] == [128, 96]
+            w, h = scene["render"]["resolution"]
+            assert w >= 256 and h >= 192, name  # the gallery's reference size
