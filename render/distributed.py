@@ -220,7 +220,6 @@ def _scene_plugin_class():
             self.numba_threads = numba_threads
 
         def setup(self, worker) -> None:
-            _keep_freed_memory()
             self.lock = threading.Lock()
             self.integrator = None
             self.build_s = self.geometry_s = None
@@ -256,27 +255,6 @@ def _scene_plugin_class():
                 return self.integrator
 
     return ScenePlugin
-
-
-def _keep_freed_memory() -> None:
-    """Let glibc keep freed memory for reuse in this worker process.
-
-    Dask's nannies start workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also fixes
-    glibc's mmap threshold at 128 kB: every numpy temporary of a chunk (65536 lanes) is
-    then mapped and unmapped anew, and chunks took 2-2.5 times as long as in-process.
-    These are glibc's own dynamic limits at their largest (32 MB mmap, 64 MB trim)."""
-    import ctypes
-    import sys
-
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        libc = ctypes.CDLL("libc.so.6")
-    except OSError:  # not glibc (musl): no such variable to undo
-        return
-    m_trim_threshold, m_mmap_threshold = -1, -3
-    libc.mallopt(m_mmap_threshold, 32 << 20)
-    libc.mallopt(m_trim_threshold, 64 << 20)
 
 
 def _plugin(name: str):

@@ -381,7 +381,7 @@ def _rays(origins, directions, tnear, tfar):
 
 # --------------------------------------------------------------- compiled kernels
 
-@njit
+@njit(allocates=True)
 def new_scratch():
     """A per-thread ``RTCRayHit`` record: float32 (SCRATCH_SIZE,), 32-byte aligned."""
     return np.zeros(SCRATCH_SIZE, np.float32)
@@ -448,7 +448,7 @@ PACKET_SCRATCH_SIZE = 192
 _VALID8 = 168
 
 
-@njit
+@njit(allocates=True)
 def new_packet_scratch():
     """A per-thread ``RTCRayHit8`` record and its ``valid`` mask: float32, 32-byte aligned."""
     return np.zeros(PACKET_SCRATCH_SIZE, np.float32)
@@ -533,7 +533,7 @@ def packet_occluded(packet, k):
 _CHUNK = 512  # rays per prange task
 
 
-@njit(parallel=True)
+@njit(allocates=True, parallel=True)
 def intersect_rays(scene, origins, directions, tnear, tfar):
     """First hits of arrays of rays on every thread numba has (``prange``).
 
@@ -558,7 +558,7 @@ def intersect_rays(scene, origins, directions, tnear, tfar):
     return t, u, v, prim, geom, ng
 
 
-@njit(parallel=True)
+@njit(allocates=True, parallel=True)
 def occluded_rays(scene, origins, directions, tnear, tfar):
     """(n,) bool occlusion of arrays of rays (arguments as :func:`intersect_rays`)."""
     n = origins.shape[0]
@@ -573,7 +573,7 @@ def occluded_rays(scene, origins, directions, tnear, tfar):
 
 
 
-@njit(parallel=True)
+@njit(allocates=True, parallel=True)
 def intersect_packets(scene, origins, directions, tnear, tfar):
     """:func:`intersect_rays` through ``rtcIntersect8``, 8 consecutive rays a packet
     (order coherent rays, e.g. camera rays by 4 x 2 pixel tiles, next to each other)."""
@@ -602,7 +602,7 @@ def intersect_packets(scene, origins, directions, tnear, tfar):
     return t, u, v, prim, geom, ng
 
 
-@njit(parallel=True)
+@njit(allocates=True, parallel=True)
 def occluded_packets(scene, origins, directions, tnear, tfar):
     """:func:`occluded_rays` through ``rtcOccluded8``, 8 consecutive rays a packet."""
     n = origins.shape[0]

@@ -257,6 +257,8 @@ class Integrator:
         self.ior_sensitive = np.array(
             [self.bound[k] or self._reads_outside_ior(k) for k in range(n_obj)], dtype=bool)
         self.passable = self.cutout | self.null_candidate
+        #: whether any lane may need per-hit bindings (:meth:`_bind`)
+        self.may_bind = bool(self.bound.any() or (self.encloses.any() and self.ior_sensitive.any()))
         self.tables, self.params = self._tables(const_emit, obj_medium)
         self.embree_time = 0.0
         self.rays = 0
@@ -502,6 +504,8 @@ class Integrator:
         the program slot of each bound lane."""
         m = len(face)
         lane_row = np.full(m, -1, dtype=np.int64)
+        if not self.may_bind:
+            return self.tables, self.params, lane_row, np.zeros((1, 11)), np.zeros(1, np.int64)
         hit = face >= 0
         objs = np.full(m, -1, dtype=np.int64)
         objs[hit] = self.geo.face_object[face[hit]]
@@ -611,7 +615,7 @@ class Integrator:
             tables, params, lane_row, bf, bslot = self._bind(
                 face[:n], b1[:n], b2[:n], lf[:n, kern.D:kern.D + 3], so, sior, li[:n, kern.NSTK])
             n, ns = kern.bounce(tables, n, face, b1, b2, t, lf, li, so, sior, u, lane_row, params,
-                                bf, bslot, L, alpha, aov, *nxt, *shadow[0])
+                                bf, bslot, L, alpha, aov, *nxt, *shadow[0], kern.scratch(tables))
             self._shadows(ns, shadow, rng, L)
             (lf, li, so, sior), nxt = nxt, (lf, li, so, sior)
         aovs = {}
@@ -659,7 +663,7 @@ class Integrator:
                     face[:ns], b1[:ns], b2[:ns], cur[0][:ns, kern.S_D:kern.S_D + 3], cur[2],
                     cur[3], cur[1][:ns, kern.S_NSTK], only=self.passable)
             ns = kern.shadow_resolve(tables, ns, *cur, face, b1, b2, t, u, lane_row, params, bf,
-                                     bslot, L, *nxt)
+                                     bslot, L, *nxt, kern.scratch(tables))
             cur, nxt = nxt, cur
 
     @property

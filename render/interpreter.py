@@ -626,9 +626,12 @@ def eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, i
 
 
 @njit
-def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1, u2x, u2y):
+def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1, u2x, u2y,
+           prepared=False):
     """``(wi xyz, pdf, weight rgb, lobe)`` of the program rooted at ``root`` (lobe 0:
-    failed); directions in its shading frame."""
+    failed); directions in its shading frame.  ``prepared``: :func:`eval_pdf` has just
+    run on ``ws`` at the same ``wo`` (its :func:`prepare` holds: evaluate changes none
+    of the registers prepare sets)."""
     if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df: its kernel alone
         return leaf_sample(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
                            ox, oy, oz, u1, u2x, u2y)
@@ -636,7 +639,8 @@ def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1,
     ko = n * _R
     fo = ko + kids.shape[0] * _KR
     lo = root - code[root, SIZE] + 1
-    prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
+    if not prepared:
+        prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
     # descend: remember the chosen child (kid slot) and its parent at every combiner
     po = fo + frames.shape[0] * _FR
     depth = 0
@@ -993,12 +997,12 @@ def _row(P, i):
     return i if P.shape[0] > 1 else 0
 
 
-@njit
+@njit(allocates=True)
 def _ws(code, kids, frames):
     return np.empty(work_size(code.shape[0], kids.shape[0], frames.shape[0]))
 
 
-@njit
+@njit(allocates=True)
 def eval_pdf_batch(code, kids, frames, P, tables, wo, wi, f, pdf):
     """:func:`eval_pdf` of a whole program over lanes (``f`` (n, 3), ``pdf`` (n,) written)."""
     ws = _ws(code, kids, frames)
@@ -1009,7 +1013,7 @@ def eval_pdf_batch(code, kids, frames, P, tables, wo, wi, f, pdf):
         f[i, 0], f[i, 1], f[i, 2], pdf[i] = a, b, c, p
 
 
-@njit
+@njit(allocates=True)
 def sample_batch(code, kids, frames, P, tables, wo, u1, u2, wi, pdf, weight, lobe):
     """:func:`sample` of a whole program over lanes (outputs written in place)."""
     ws = _ws(code, kids, frames)
@@ -1021,7 +1025,7 @@ def sample_batch(code, kids, frames, P, tables, wo, u1, u2, wi, pdf, weight, lob
         weight[i, 0], weight[i, 1], weight[i, 2], lobe[i] = s[4], s[5], s[6], s[7]
 
 
-@njit
+@njit(allocates=True)
 def albedo_batch(code, kids, frames, P, tables, wo, points, out):
     """:func:`albedo` of a whole program over lanes."""
     ws = _ws(code, kids, frames)
@@ -1032,7 +1036,7 @@ def albedo_batch(code, kids, frames, P, tables, wo, points, out):
                                                  wo[i, 1], wo[i, 2])
 
 
-@njit
+@njit(allocates=True)
 def cheap_albedo_batch(code, kids, frames, P, tables, wo, out):
     """:func:`cheap_albedo` of a whole program over lanes."""
     ws = _ws(code, kids, frames)
@@ -1043,7 +1047,7 @@ def cheap_albedo_batch(code, kids, frames, P, tables, wo, out):
                                                        wo[i, 0], wo[i, 1], wo[i, 2])
 
 
-@njit
+@njit(allocates=True)
 def edf_eval_pdf_batch(code, kids, frames, P, tables, wo, e, pdf):
     """:func:`edf_eval_pdf` of a whole program over lanes."""
     ws = _ws(code, kids, frames)
@@ -1054,7 +1058,7 @@ def edf_eval_pdf_batch(code, kids, frames, P, tables, wo, e, pdf):
         e[i, 0], e[i, 1], e[i, 2], pdf[i] = a, b, c, p
 
 
-@njit
+@njit(allocates=True)
 def edf_sample_batch(code, kids, frames, P, tables, u1, u2, wo, pdf, weight):
     """:func:`edf_sample` of a whole program over lanes."""
     ws = _ws(code, kids, frames)
@@ -1077,7 +1081,7 @@ def mix_weights_batch(op, P, b, out):
 
 
 # ------------------------------------------------------------------ Ĉ tables
-@njit
+@njit(allocates=True)
 def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):
     """The Ĉ table of curve layer ``k`` (``render.df._layer.CurveAlbedo._build_side``,
     both sides): ``out`` (2, 2, THETA, 3) gets per side the node values (largest over

@@ -229,26 +229,25 @@ def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
     return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
 
 
-@njit(inline="always")
-def _environment(tb, dx, dy, dz):
+@njit
+def _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz):
     """Radiance along an escaping direction and the pdf of sampling it (selection
     included): (pdf, r, g, b)."""
-    sc = tb.scalars
     kind = sc[SC_ENV]
     select = sc[SC_SELECT]
     if kind == ENVIRONMENT:
-        return 0.25 / np.pi * select, tb.env[0], tb.env[1], tb.env[2]
+        return 0.25 / np.pi * select, env[0], env[1], env[2]
     if kind == ENVIRONMENT_MAP:
-        pe, e0, e1, e2 = _environment_map(tb.env_image, tb.env_p, sc[SC_ROT_C], sc[SC_ROT_S],
+        pe, e0, e1, e2 = _environment_map(env_image, env_p, sc[SC_ROT_C], sc[SC_ROT_S],
                                           dx, dy, dz)
         return pe * select, e0, e1, e2
     if kind == SUN_AND_SKY:
-        e0, e1, e2 = sun_and_sky_eval(tb.sky, dx, dy, dz)
-        return sun_and_sky_pdf(tb.sky, tb.sky_p, dx, dy, dz) * select, e0, e1, e2
+        e0, e1, e2 = sun_and_sky_eval(sky, dx, dy, dz)
+        return sun_and_sky_pdf(sky, sky_p, dx, dy, dz) * select, e0, e1, e2
     return 0.0, 0.0, 0.0, 0.0
 
 
-@njit(inline="always")
+@njit
 def sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                   light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
                   env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
@@ -352,7 +351,7 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
     return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False, -1, 0.0, 0.0, 0.0
 
 
-@njit
+@njit(allocates=True)
 def sample_lights(tb, p, u):
     """:func:`sample_light` for points ``p`` (n, 3) with uniforms ``u`` (n, 3): the
     light chosen by ``u[:, 0]`` as :func:`bounce` chooses it, sampled with ``u[:, 1:]``.
@@ -374,20 +373,23 @@ def sample_lights(tb, p, u):
     return wi, dist, li, pdf, delta, face
 
 
-@njit
+@njit(allocates=True)
 def escaped(tb, d):
     """What a path sees along unit directions ``d`` (n, 3) that leave the scene: the
     pdf with which light sampling picks them (selection included) (n,) and the
     radiance (n, 3)."""
     n = len(d)
     pdf, li = np.empty(n), np.empty((n, 3))
+    sc, env, env_image, env_p, sky, sky_p = (tb.scalars, tb.env, tb.env_image, tb.env_p, tb.sky,
+                                             tb.sky_p)
     for i in range(n):
-        pdf[i], li[i, 0], li[i, 1], li[i, 2] = _environment(tb, d[i, 0], d[i, 1], d[i, 2])
+        pdf[i], li[i, 0], li[i, 1], li[i, 2] = _environment(sc, env, env_image, env_p, sky, sky_p,
+                                                            d[i, 0], d[i, 1], d[i, 2])
     return pdf, li
 
 
 # ------------------------------------------------------- the stack of closed objects
-@njit
+@njit(allocates=True)
 def outside_ior(so, sior, nstk, objs):
     """(n,) the IOR around object ``objs[i]`` for stack rows ``i`` (for the bindings)."""
     out = np.ones(len(objs))
@@ -447,6 +449,12 @@ def _attributes(packed, faces, face_normal, f, w1, w2):
     u = w0 * tp[v0, 12] + w1 * tp[v1, 12] + w2 * tp[v2, 12]
     v = w0 * tp[v0, 13] + w1 * tp[v1, 13] + w2 * tp[v2, 13]
     return px, py, pz, nx, ny, nz, tx, ty, tz, u, v
+
+
+def scratch(tb) -> np.ndarray:
+    """The interpreter's scratch for the programs of ``tb`` (one per thread and stage
+    call: the kernels own no memory, so they count no references)."""
+    return np.empty(interpreter.work_size(len(tb.code), len(tb.kids), len(tb.frames)))
 
 
 # -------------------------------------------------------------------- stage 1
@@ -514,7 +522,7 @@ def _parallel_shift(eps, gx, gy, gz, dx, dy, dz):
 
 @njit
 def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bslot, L,
-           alpha, aov, nlf, nli, nso, nsior, sf, si, sso, ssior):
+           alpha, aov, nlf, nli, nso, nsior, sf, si, sso, ssior, ws):
     """Stage 2 for every lane: see the module docstring.
 
     ``u`` (m, 9) uniforms per lane: free flight, cutout, light (3), bsdf or phase (3),
@@ -526,7 +534,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     Lanes ``0 .. m-1`` are read; the lanes that go on are written to ``nlf``, ``nli``,
     ``nso``, ``nsior`` and the shadow records to ``sf``, ``si``, ``sso``, ``ssior`` (all
     with at least ``m`` rows, reused from segment to segment: a fresh allocation per
-    segment costs page faults).  Returns their counts ``(nn, ns)``.
+    segment costs page faults).  ``ws``: the interpreter's scratch (:func:`scratch`).
+    Returns their counts ``(nn, ns)``.
     """
     sc = tb.scalars
     eps = sc[SC_EPS]
@@ -547,7 +556,6 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     light_pdf_area, light_object, emit_light = tb.light_pdf_area, tb.light_object, tb.emit_light
     env, env_image, env_p, env_cdf = tb.env, tb.env_image, tb.env_p, tb.env_cdf
     sky, sky_p, sky_cdf = tb.sky, tb.sky_p, tb.sky_cdf
-    ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
     nn = 0
     ns = 0
     for i in range(m):
@@ -624,7 +632,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             continue
         if f < 0:
             # ---- escaped: the environment, weighted against light sampling
-            pe, e0, e1, e2 = _environment(tb, dx, dy, dz)
+            pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
             if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
                 w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
                 L[lane, 0] += b0 * e0 * w
@@ -704,6 +712,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             continue
         encloses = (flags & ENCLOSES) != 0
         # next-event estimation
+        prepared = False
         if can_continue:
             j = min(int(u[i, 2] * n_lights), n_lights - 1)
             (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
@@ -718,6 +727,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
                 f0, f1, f2, pb = interpreter.eval_pdf(code, kids, frames, params, chat, row, ws,
                                                       root, f_lo, f_hi, wox, woy, woz, wlx, wly,
                                                       wlz)
+                prepared = True
                 w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf / mis
                 c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
                 if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
@@ -735,7 +745,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # the bsdf's sample continues the path
         wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
             code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
-            u[i, 5], u[i, 6], u[i, 7])
+            u[i, 5], u[i, 6], u[i, 7], prepared)
         if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
             continue
         nx2 = wix * sx + wiy * qx + wiz * nx
@@ -808,13 +818,13 @@ def shadow_trace(scene, tb, sf, n, any_pass, face, b1, b2, t):
 
 @njit
 def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, params, bf,
-                   bslot, L, nsf, nsi, nso, nsior):
+                   bslot, L, nsf, nsi, nso, nsior, ws):
     """Attenuate each shadow segment by its medium; add what reaches the light to ``L``,
     drop what is blocked, and move records that cross a cutout or a null surface to
     their next segment (entering or leaving the object).  Bindings as in
     :func:`bounce` (for the cutout and null surfaces hit).  Records ``0 .. m-1`` are
     read; those still on their way are written to ``nsf``, ``nsi``, ``nso``, ``nsior``;
-    returns their count."""
+    returns their count.  ``ws``: the interpreter's scratch (:func:`scratch`)."""
     sc = tb.scalars
     eps = sc[SC_EPS]
     has_media = sc[SC_MEDIA] != 0.0
@@ -824,7 +834,6 @@ def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, p
     frame_lo, frame_hi, packed, faces = tb.frame_lo, tb.frame_hi, tb.packed, tb.faces
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity = tb.obj_opacity
-    ws = np.empty(interpreter.work_size(code.shape[0], kids.shape[0], frames.shape[0]))
     nn = 0
     for i in range(m):
         f = face[i]

@@ -224,7 +224,7 @@ def _xyY_to_rgb(x, y, big_y):  # noqa: N802
     return max(r, 0.0), max(g, 0.0), max(b, 0.0)
 
 
-@njit
+@njit(allocates=True)
 def _preetham_rows(q, cos_theta, cos_gamma):
     """:func:`_preetham` of each row -> (3, n): Y, x, y."""
     out = np.empty((3, len(cos_theta)))
@@ -233,7 +233,7 @@ def _preetham_rows(q, cos_theta, cos_gamma):
     return out
 
 
-@njit
+@njit(allocates=True)
 def _xyY_rows(x, y, big_y):  # noqa: N802
     """:func:`_xyY_to_rgb` of each row -> (n, 3)."""
     out = np.empty((len(x), 3))
@@ -387,7 +387,7 @@ def sun_and_sky_sample(params, p, cdf, u1, u2):
 # --- batch wrappers: the kernels over rows (the numpy API of SunAndSky) -----------------------
 
 
-@njit
+@njit(allocates=True)
 def _radiance_rows(params, d, part):
     """Sky + sun, sky or sun (``part``) radiance of each row of ``d`` -> (n, 3)."""
     out = np.empty((d.shape[0], 3))
@@ -403,7 +403,7 @@ def _radiance_rows(params, d, part):
     return out
 
 
-@njit
+@njit(allocates=True)
 def _pdf_rows(params, p, d):
     """:func:`sun_and_sky_pdf` of each row of ``d`` -> (n,)."""
     out = np.empty(d.shape[0])
@@ -412,7 +412,7 @@ def _pdf_rows(params, p, d):
     return out
 
 
-@njit
+@njit(allocates=True)
 def _sample_rows(params, p, cdf, u):
     """:func:`sun_and_sky_sample` of each row of ``u`` -> (n, 3)."""
     out = np.empty((u.shape[0], 3))

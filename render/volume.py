@@ -239,7 +239,7 @@ class HomogeneousMedium:
 
 
 # ------------------------------------------------------------------------ kernels
-@njit(inline="always")
+@njit
 def transmittance(medium, m, c, length):
     """``exp(-sigma_t length)`` in channel ``c`` of row ``m`` of a medium table
     (``sigma_a, sigma_s, sigma_t`` per row; see :attr:`HomogeneousMedium.row`): 1 where
@@ -274,7 +274,7 @@ def free_flight(medium, m, hero, u, t_max):
     return False, t, tr0, tr1, tr2, tr0, tr1, tr2
 
 
-@njit
+@njit(allocates=True)
 def _transmittance_batch(medium, d):
     out = np.empty((len(d), 3))
     for i in range(len(d)):
@@ -283,7 +283,7 @@ def _transmittance_batch(medium, d):
     return out
 
 
-@njit
+@njit(allocates=True)
 def _free_flight_batch(medium, t_max, hero, u):
     n = len(t_max)
     t, scattered = np.empty(n), np.empty(n, dtype=np.bool_)
@@ -294,7 +294,7 @@ def _free_flight_batch(medium, t_max, hero, u):
     return t, scattered, value, pdf
 
 
-@njit(inline="always")
+@njit
 def stack_push(so, sior, i, n, obj, ior):
     """Enter ``obj`` (with its IOR) on stack row ``i`` of size ``n``; returns the new
     size (a full stack stays as it is)."""
@@ -305,7 +305,7 @@ def stack_push(so, sior, i, n, obj, ior):
     return n
 
 
-@njit(inline="always")
+@njit
 def stack_pop(so, sior, i, n, obj):
     """Leave ``obj``: remove its topmost entry from row ``i``, keeping the others'
     order; returns the new size (unchanged if the row does not hold ``obj``)."""
@@ -320,7 +320,7 @@ def stack_pop(so, sior, i, n, obj):
     return n
 
 
-@njit(inline="always")
+@njit
 def stack_outside_ior(so, sior, i, n, obj):
     """The IOR around ``obj`` for row ``i``: its topmost entry that is not ``obj`` (1:
     air)."""

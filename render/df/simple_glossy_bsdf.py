@@ -227,7 +227,7 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     return wix, wiy, wiz, pdf, w0, w1, w2, lobe
 
 
-@njit
+@njit(allocates=True)
 def sample_weights(P, flags, wo, pts):
     """First-channel sample weights (m, k) of :func:`sample` on row 0 of ``P`` for each
     ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo

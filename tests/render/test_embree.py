@@ -319,7 +319,7 @@ def test_threads_give_the_same_hits(scene, rng):
     np.testing.assert_array_equal(out[1], one[0])
 
 
-@njit
+@njit(allocates=True)
 def _serial_t(scene, o, d):
     scratch = new_scratch()
     t = np.empty(o.shape[0], np.float32)
