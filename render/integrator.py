@@ -563,12 +563,6 @@ class Integrator:
                                       frame_lo=table.frame_lo, frame_hi=table.frame_hi)
         return tables, params, lane_row, bf, bslot
 
-    def _object_area(self, k: int) -> float:
-        first, last = self.geo.face_offset[k], self.geo.face_offset[k + 1]
-        c = self.geo.vertices[self.geo.faces[first:last]]
-        return float(0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]),
-                                          axis=1).sum())
-
     # --------------------------------------------------------------- one chunk
     def trace(self, pixel: np.ndarray, rng: np.random.Generator) -> tuple:
         """Trace one path per entry of ``pixel``.

@@ -104,7 +104,8 @@ def njit(function=None, allocates: bool = False, **options):
     (measured: 22 % of a render's time).  A kernel that creates an array (``np.empty``
     ...) or returns one says ``allocates=True``."""
     def decorate(f):
-        opts = {"nogil": True, "cache": _in_package(f), "_nrt": allocates, **options}
+        opts = {"nogil": True, "cache": _in_package(f), "_nrt": allocates,
+                "error_model": "numpy", **options}
         return numba.njit(**opts)(f)
 
     return decorate if function is None else decorate(function)
