@@ -11,6 +11,12 @@ Registered through the ``pwc.commands`` entry point (``gallery =
 * ``pwc gallery sheet [FIGURE...] [-o gallery/index.html]`` checks them and writes the
   contact sheet (:mod:`gallery.sheet`).
 
+With ``--workers N`` or ``--scheduler ADDRESS`` each figure (a whole render, a whole
+check) is one task on a Dask cluster (:func:`render.distributed.map_on_cluster`): the
+client loads the scenes, the workers render (and judge), and the client writes the
+files and prints the table in the figures' order; the same images, bit for bit.  A
+cluster that cannot work exits with status 3.
+
 Exit status: 0 ok; 1 a figure failed its check or a scene has errors; 2 bad command
 line; 3 a file could not be read or written.
 """
@@ -22,6 +28,7 @@ import sys
 from pathlib import Path
 
 from pwc.files import OutputError, prepare_output
+from render.distributed import add_cluster_options
 
 __all__ = ["register", "run_render", "run_check", "run_sheet"]
 
@@ -37,6 +44,7 @@ _EPILOG = """\
 examples:
   pwc gallery render 14.28 -o out/ --resolution 512 384 --spp 64 --denoise
   pwc gallery check 13            # every figure of chapter 13, by the test's rule
+  pwc gallery check --workers 2   # every figure, one task each on 2 local processes
   pwc gallery sheet -o gallery/index.html"""
 
 
@@ -48,16 +56,19 @@ def register(subparsers) -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="gallery_command", metavar="{render,check,sheet}",
                            required=True)
 
-    def figures_arg(q):
+    def figures_arg(q, work: str):
         q.add_argument("figures", nargs="*", metavar="FIGURE",
                        help="chapter, figure number, scene name or glob (default: all)")
         q.add_argument("--quiet", action="store_true", help="no progress bar or table")
+        add_cluster_options(q, f"{work} the figures, one task each,")
 
     r = sub.add_parser("render", help="render figures to a folder (EXR and PNG)",
                        description="Render gallery figures to DIR/NAME.exr (linear RGBA) and "
                                    "DIR/NAME.png (sRGB), at their reference size unless told.",
-                       epilog="example: pwc gallery render 13.14 13.33 -o out/ --spp 128")
-    figures_arg(r)
+                       epilog="examples:\n  pwc gallery render 13.14 13.33 -o out/ --spp 128\n"
+                              "  pwc gallery render 14 -o out/ --scheduler tcp://host:8786",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    figures_arg(r, "render")
     r.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
     budget = r.add_mutually_exclusive_group()
     budget.add_argument("--spp", type=int, metavar="N", help="samples per pixel")
@@ -74,8 +85,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                                    "few samples, a fixed seed), compare it with its reference "
                                    "by RMSE, FLIP and image mean against the measured "
                                    "thresholds, print a table, and exit 1 if any fails.",
-                       epilog="example: pwc gallery check 12.12 12.13 --save out/check")
-    figures_arg(c)
+                       epilog="examples:\n  pwc gallery check 12.12 12.13 --save out/check\n"
+                              "  pwc gallery check --workers 2",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    figures_arg(c, "check")
     c.add_argument("--save", metavar="DIR",
                    help="also write each render, its reference and FLIP map as EXR there")
     c.add_argument("--references", metavar="DIR",
@@ -89,7 +102,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                                    "error, grouped by chapter.  Images go to sheet/ beside "
                                    "the page.",
                        epilog="example: pwc gallery sheet 13 -o /tmp/sheet/index.html")
-    figures_arg(s)
+    figures_arg(s, "check")
     s.add_argument("-o", "--output", default="gallery/index.html", metavar="PAGE.html",
                    help="the page to write (default: gallery/index.html)")
     s.add_argument("--references", metavar="DIR",
@@ -113,16 +126,52 @@ def _select(args):
 
 
 def _bar(items, args, unit: str):
-    if args.quiet or not sys.stderr.isatty():
+    if not _progress(args):
         return items
     from tqdm import tqdm
 
     return tqdm(items, unit=unit, leave=False)
 
 
+def _on_cluster(args) -> bool:
+    return bool(args.scheduler or args.workers)
+
+
+def _progress(args) -> bool:
+    """A bar redrawn with carriage returns only on a terminal, not into a log."""
+    return not args.quiet and sys.stderr.isatty()
+
+
+def _rendered(args, figs):
+    """``(figure, film)`` in the figures' order: rendered in-process, or one task per
+    figure on a cluster (the scenes loaded here, the films brought back)."""
+    from gallery.compare import figure_scene, render_figure
+
+    def size(fig):
+        return args.resolution or fig.resolution
+
+    if not _on_cluster(args):
+        for fig in figs:
+            yield fig, render_figure(fig, args.spp, args.seed, resolution=size(fig),
+                                     progress=_progress(args), denoise=args.denoise,
+                                     time=args.time)
+        return
+    from functools import partial
+
+    from render.distributed import cluster, map_on_cluster
+    from render.integrator import render
+
+    task = partial(render, progress=False, threads=1, denoise=args.denoise)
+    with cluster(args.scheduler, args.workers) as client:
+        scenes = (figure_scene(fig, size(fig), args.spp, args.seed, args.time) for fig in figs)
+        for i, film in map_on_cluster(client, task, scenes, progress=_progress(args),
+                                      desc="render figures", unit="figure"):
+            yield figs[i], film
+
+
 def run_render(args) -> int:
     """``pwc gallery render``."""
-    from gallery.compare import render_figure
+    from render.distributed import ClusterError
     from render.scene import SceneError
 
     figs, status = _select(args)
@@ -146,38 +195,51 @@ def run_render(args) -> int:
                 prepare_output(out / f"{fig.name}.{ext}", "the image")
     except OutputError as e:
         return _error(str(e), EXIT_IO)
-    for fig in figs:
-        try:
-            film = render_figure(fig, args.spp, args.seed,
-                                 resolution=args.resolution or fig.resolution,
-                                 progress=not args.quiet and sys.stderr.isatty(),
-                                 denoise=args.denoise, time=args.time)
-            film.write_exr(out / f"{fig.name}.exr", aovs=[])
-            film.write_png(out / f"{fig.name}.png")
-        except SceneError as e:
-            print(str(e), file=sys.stderr)
-            return EXIT_FAILED
-        except OSError as e:
-            return _error(f"cannot write {out / fig.name}: {e.strerror or e}", EXIT_IO)
-        if not args.quiet:
-            st = film.stats
-            print(f"Figure {fig.number:>6}  {fig.name}: {film.width} x {film.height}, "
-                  f"{st['spp']} spp{', denoised' if args.denoise else ''}, "
-                  f"{st['time_s'] + st.get('build_s', 0.0):.1f} s -> {out / fig.name}.png",
-                  file=sys.stderr)
+    try:
+        for fig, film in _rendered(args, figs):
+            try:
+                film.write_exr(out / f"{fig.name}.exr", aovs=[])
+                film.write_png(out / f"{fig.name}.png")
+            except OSError as e:
+                return _error(f"cannot write {out / fig.name}: {e.strerror or e}", EXIT_IO)
+            if not args.quiet:
+                st = film.stats
+                print(f"Figure {fig.number:>6}  {fig.name}: {film.width} x {film.height}, "
+                      f"{st['spp']} spp{', denoised' if args.denoise else ''}, "
+                      f"{st['time_s'] + st.get('build_s', 0.0):.1f} s -> {out / fig.name}.png",
+                      file=sys.stderr)
+    except SceneError as e:
+        print(str(e), file=sys.stderr)
+        return EXIT_FAILED
+    except ClusterError as e:
+        return _error(str(e), EXIT_IO)
+    except OSError as e:
+        return _error(f"{e.filename or 'a scene'}: {e.strerror or e}", EXIT_IO)
     return EXIT_OK
 
 
 def _checked(args, figs):
-    """(figure, Outcome or None) for each figure, and the references table."""
-    from gallery.compare import check, read_table
+    """(figure, Outcome or None) for each figure, and the references table: checked
+    in-process, or one task per figure on a cluster."""
+    from gallery.compare import check, check_job, read_table, render_and_judge
 
     folder = Path(args.references) if args.references else None
     table = read_table(folder)
-    results = []
-    for fig in _bar(figs, args, "figure"):
-        results.append((fig, check(fig, table, folder) if fig.name in table else None))
-    return results, table
+    known = [fig for fig in figs if fig.name in table]
+    if _on_cluster(args):
+        from functools import partial
+
+        from render.distributed import cluster, map_on_cluster
+
+        with cluster(args.scheduler, args.workers) as client:
+            jobs = (check_job(fig, table, folder) for fig in known)
+            done = dict(map_on_cluster(client, partial(render_and_judge, threads=1), jobs,
+                                       progress=_progress(args), desc="check figures",
+                                       unit="figure"))
+        outcomes = {known[i].name: o for i, o in done.items()}
+    else:
+        outcomes = {fig.name: check(fig, table, folder) for fig in _bar(known, args, "figure")}
+    return [(fig, outcomes.get(fig.name)) for fig in figs], table
 
 
 def _table(results) -> str:
@@ -209,6 +271,8 @@ def _save(folder: Path, outcome) -> None:
 
 def run_check(args) -> int:
     """``pwc gallery check``."""
+    from render.distributed import ClusterError
+
     figs, status = _select(args)
     if figs is None:
         return status
@@ -219,7 +283,10 @@ def run_check(args) -> int:
                     prepare_output(Path(args.save) / f"{fig.name}_{tag}.exr", "--save image")
         except OutputError as e:
             return _error(str(e), EXIT_IO)
-    results, _ = _checked(args, figs)
+    try:
+        results, _ = _checked(args, figs)
+    except ClusterError as e:
+        return _error(str(e), EXIT_IO)
     if args.save:
         for _, o in results:
             if o is not None:
@@ -232,6 +299,7 @@ def run_check(args) -> int:
 def run_sheet(args) -> int:
     """``pwc gallery sheet``."""
     from gallery.sheet import write_sheet
+    from render.distributed import ClusterError
 
     figs, status = _select(args)
     if figs is None:
@@ -240,7 +308,10 @@ def run_sheet(args) -> int:
         prepare_output(args.output, "the page")
     except OutputError as e:
         return _error(str(e), EXIT_IO)
-    results, table = _checked(args, figs)
+    try:
+        results, table = _checked(args, figs)
+    except ClusterError as e:
+        return _error(str(e), EXIT_IO)
     try:
         page = write_sheet(args.output, results, table,
                            Path(args.references) if args.references else None)

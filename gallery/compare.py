@@ -48,6 +48,9 @@ __all__ = [
     "figure_scene",
     "render_figure",
     "judge",
+    "CheckJob",
+    "check_job",
+    "render_and_judge",
     "check",
 ]
 
@@ -189,6 +192,9 @@ def judge(name: str, img: np.ndarray, ref: np.ndarray, entry: dict) -> Outcome:
     """Judge a test render ``img`` against the reference ``ref`` averaged to its size, by
     the thresholds ``entry["test"]`` of the references table."""
     t = entry["test"]
+    # aligned: numpy sums misaligned data (as an array can arrive from a cluster's
+    # worker) in another order, and the means would differ in their last bits
+    img, ref = (np.require(a, np.float64, ["C", "A"]) for a in (img, ref))
     if img.shape != ref.shape:
         raise ValueError(f"{name}: the render is {img.shape[1]} x {img.shape[0]}, the "
                          f"reference {ref.shape[1]} x {ref.shape[0]}")
@@ -202,9 +208,23 @@ def judge(name: str, img: np.ndarray, ref: np.ndarray, entry: dict) -> Outcome:
         error_map=err, image=img, reference=ref)
 
 
-def check(figure: Figure, table: dict | None = None, folder: Path | None = None,
-          progress: bool = False) -> Outcome:
-    """Render ``figure`` by the rule and judge it against its reference.
+@dataclass(frozen=True)
+class CheckJob:
+    """What checking a figure needs, read where the files are (:func:`check_job`): its
+    scene as the rule renders it, its reference averaged to the test size, and its
+    entry of the references table.  Whole on its own, so a cluster's worker can check
+    the figure in one task (``pwc gallery check --workers``) without the files."""
+
+    name: str
+    scene: object = field(repr=False)  # render.scene.Scene
+    reference: np.ndarray = field(repr=False)
+    entry: dict = field(repr=False)
+    load_s: float = 0.0  # seconds reading the scene
+
+
+def check_job(figure: Figure, table: dict | None = None,
+              folder: Path | None = None) -> CheckJob:
+    """Read what checking ``figure`` needs.
 
     Raises
     ------
@@ -218,7 +238,30 @@ def check(figure: Figure, table: dict | None = None, folder: Path | None = None,
     entry = table[figure.name]
     ref = downsample(read_reference(figure.name, folder), figure.factor)
     t0 = _time.perf_counter()
-    film = render_figure(figure, entry["test"]["spp"], TEST_SEED, progress=progress)
-    outcome = judge(figure.name, film.rgb(), ref, entry)
-    outcome.spp, outcome.time_s = int(film.stats["spp"]), _time.perf_counter() - t0
+    scene = figure_scene(figure, spp=entry["test"]["spp"], seed=TEST_SEED)
+    return CheckJob(figure.name, scene, ref, entry, _time.perf_counter() - t0)
+
+
+def render_and_judge(job: CheckJob, progress: bool = False, threads: int = 2) -> Outcome:
+    """Render a :class:`CheckJob`'s scene and judge it; ``time_s`` counts reading the
+    scene, rendering and judging.  Pure: writes nothing."""
+    from render.integrator import render
+
+    t0 = _time.perf_counter()
+    film = render(job.scene, progress=progress, threads=threads)
+    outcome = judge(job.name, film.rgb(), job.reference, job.entry)
+    outcome.spp = int(film.stats["spp"])
+    outcome.time_s = job.load_s + _time.perf_counter() - t0
     return outcome
+
+
+def check(figure: Figure, table: dict | None = None, folder: Path | None = None,
+          progress: bool = False) -> Outcome:
+    """Render ``figure`` by the rule and judge it against its reference.
+
+    Raises
+    ------
+    KeyError
+        The figure has no reference (run ``python -m gallery.references NAME``).
+    """
+    return render_and_judge(check_job(figure, table, folder), progress)

@@ -28,6 +28,12 @@ How the work travels:
 * **The time budget** holds across workers: once it is spent (and one pass is merged)
   the client cancels the chunks in flight and keeps the whole passes merged so far.
 
+**Whole tasks** (:func:`map_on_cluster`): work that is whole on its own (a gallery
+figure, a ``pwc trade`` run) goes as one task per item, the loaded scene in the task's
+arguments: it reaches only the worker that runs it, and stays with the scheduler, which
+runs the task again elsewhere if that worker dies.  Such tasks return their results
+and write nothing; the client writes the files.
+
 Workers must run the same render code (:data:`render.jit.SOURCE_KEY`) and the same
 numpy, numba and embreex as the client, or the bits could differ: the client checks
 every worker, and a worker that joins with other code fails its chunks with a message.
@@ -52,6 +58,7 @@ __all__ = [
     "ClusterError",
     "cluster",
     "render_on_cluster",
+    "map_on_cluster",
     "add_cluster_options",
     "worker_identity",
 ]
@@ -72,22 +79,36 @@ class ClusterError(RuntimeError):
 
 
 # --------------------------------------------------------------------------- cluster
-def add_cluster_options(parser) -> None:
+def add_cluster_options(parser, work: str = "render") -> None:
     """Add ``--scheduler ADDRESS`` and ``--workers N`` (mutually exclusive) to a command
-    that can spread its work over a Dask cluster (``pwc render``)."""
+    that can spread its work over a Dask cluster; ``work`` says what in their help
+    (``"render"``, ``"render the figures"``...)."""
     g = parser.add_mutually_exclusive_group()
     g.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="render on a running Dask cluster (`dask scheduler`, then `dask worker ADDRESS` "
-        "on each machine), e.g. tcp://scheduler-host:8786",
+        help=f"{work} on a running Dask cluster (`dask scheduler`, then `dask worker "
+        "ADDRESS` on each machine), e.g. tcp://scheduler-host:8786",
     )
     g.add_argument(
         "--workers",
-        type=int,
+        type=_worker_count,
         metavar="N",
-        help="render on a local cluster of N worker processes on this machine",
+        help=f"{work} on a local cluster of N worker processes on this machine",
     )
+
+
+def _worker_count(text: str) -> int:
+    """``--workers N``: a whole number >= 1 (argparse reports the message, status 2)."""
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"--workers must be >= 1, got {text}")
+    return n
 
 
 @contextmanager
@@ -262,17 +283,24 @@ def _plugin(name: str):
     set to this host's share of cores (numba would start one thread per core in every
     task thread of every worker, and spinning OpenMP threads on busy cores slow each
     chunk several times)."""
-    import numba
     from distributed import get_worker
 
     worker = get_worker()
     plugin = worker.plugins.get(name)
     if plugin is None:
         raise ClusterError(f"worker {worker.address} has no scene {name!r} (was it unregistered?)")
-    share = plugin.numba_threads.get(_host(worker.address))
+    _numba_share(worker, plugin.numba_threads)
+    return worker, plugin
+
+
+def _numba_share(worker, shares: dict) -> None:
+    """Set the calling task thread's numba threads to its host's share (``shares``, from
+    :func:`_numba_threads`)."""
+    import numba
+
+    share = shares.get(_host(worker.address))
     if share is not None:
         numba.set_num_threads(min(share, numba.config.NUMBA_NUM_THREADS))
-    return worker, plugin
 
 
 def _host(address: str) -> str:
@@ -585,3 +613,112 @@ def _tasks(plan: PassPlan, per_task: int, threads: int):
             if left is not None:
                 left -= len(group)
         k += 1
+
+
+# ---------------------------------------------------------------------- whole tasks
+def map_on_cluster(
+    client,
+    function,
+    jobs,
+    progress: bool = True,
+    desc: str = "tasks",
+    unit: str = "task",
+    stop=None,
+) -> Iterator[tuple[int, object]]:
+    """Run ``function(job)`` for every job, one task each, on the cluster of ``client``,
+    and yield ``(index, result)`` in the jobs' order as the results arrive.
+
+    For work that is whole on its own: a gallery figure, a ``pwc trade`` run.  The job
+    travels in the task's arguments (pickled by Dask with cloudpickle, so a loaded
+    :class:`~render.scene.Scene` goes with what its files gave it) to the one worker
+    that runs it; the scheduler keeps it, and runs the task again elsewhere if that
+    worker dies.  So ``function`` must be pure: it returns what it made and writes no
+    file (the client writes them), and it must be importable on the workers (a
+    module-level function, or a ``functools.partial`` of one).  Each task runs with the
+    worker settings of :func:`render_on_cluster` (glibc keeps freed memory; numba's
+    threads are the host's cores over its task threads).
+
+    Parameters
+    ----------
+    client : distributed.Client
+    function : callable
+    jobs : iterable
+        Consumed whole before the first result is yielded (each is submitted as soon as
+        it is made, so workers start while the client makes the next).
+    progress : bool or bar
+        One bar on the client, counting the tasks as they finish, in any order; or the
+        caller's own bar (anything with ``update(n)``), which it keeps.
+    desc, unit : str
+        The bar's label and unit.
+    stop : callable, optional
+        Called after each finished task; when it returns True, the tasks not finished
+        are cancelled, and the finished ones are yielded, in order, with gaps.
+
+    Raises
+    ------
+    ClusterError
+        No workers, workers with other code, or a task that kept killing workers.
+    Exception
+        The first task error, as the task raised it.
+    """
+    from distributed import as_completed
+
+    _wait_for_workers(client)
+    _check_workers(client)
+    shares = _numba_threads(client)
+    tag = uuid.uuid4().hex[:8]
+    index: dict = {}
+    results: dict = {}
+    ac = as_completed()
+    bar, own = None, False
+    try:
+        for i, job in enumerate(jobs):
+            fut = client.submit(_whole_task, function, job, shares, pure=False,
+                                key=f"pwc-{unit}-{tag}-{i}")
+            index[fut] = i
+            ac.add(fut)
+        total = len(index)
+        if hasattr(progress, "update"):
+            bar, own = progress, False
+        elif progress:
+            from tqdm import tqdm
+
+            desc = f"{desc} on {len(client.nthreads())} workers"
+            bar, own = tqdm(total=total, unit=unit, desc=desc, leave=False), True
+        done = 0
+        for fut in ac:
+            i = index.pop(fut)
+            try:
+                results[i] = fut.result()
+            except Exception as e:
+                raise _explain(e, f"{unit} {i + 1} of {total}") from None
+            if bar is not None:
+                bar.update(1)
+            while done in results:
+                yield done, results.pop(done)
+                done += 1
+            if stop is not None and stop():
+                break
+        # stopped: what finished meanwhile is kept; the rest is cancelled below
+        for fut, i in list(index.items()):
+            if fut.status == "finished":
+                results[i] = fut.result()
+                del index[fut]
+        for i in sorted(results):
+            yield i, results[i]
+    finally:
+        if index:
+            client.cancel(list(index))
+        if own:
+            bar.close()
+
+
+def _whole_task(function, job, shares: dict):
+    """A whole task on a worker: the worker settings of the chunks, then the job."""
+    from distributed import get_worker
+
+    from render.passes import keep_freed_memory
+
+    keep_freed_memory()
+    _numba_share(get_worker(), shares)
+    return function(job)

@@ -2,8 +2,10 @@
 cheapest settings that meet a target error.
 
 Registered through the ``pwc.commands`` entry point (``trade = "trade.command:register"``).
-Exit status: 0 done (a recommendation, or a report saying no run met the target); 1 the
-scene has errors; 2 bad command line; 3 a file could not be read or written.
+With ``--workers N`` or ``--scheduler ADDRESS`` every measured run is one task on a Dask
+cluster (:mod:`render.distributed`), timed on its worker.  Exit status: 0 done (a
+recommendation, or a report saying no run met the target); 1 the scene has errors; 2
+bad command line; 3 a file could not be read or written, or the cluster cannot work.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from pathlib import Path
 
 from pwc.cli import add_profiles_option
 from pwc.files import OutputError, prepare_output
+from render.distributed import add_cluster_options
 
 __all__ = ["register", "run", "FAMILIES"]
 
@@ -35,13 +38,16 @@ pixels of displaced objects).  The cheapest options that meet the target are the
 combined and measured.  REPORT/ gets report.md and report.html (plots of error against
 time and memory with the Pareto front, the table of every run), runs.json, the images,
 and recommended.toml: the fastest measured run that meets --target-error, as a scene
-file for pwc render."""
+file for pwc render.  With --workers or --scheduler each run is one task on a Dask
+cluster, timed on its worker (runs sharing a machine share its cores: docs/trade.md);
+the images and errors are the in-process ones."""
 
 _EPILOG = """\
 examples:
   pwc trade gallery/scenes/fig_15_21.toml -o trade_report/
   pwc trade scene.toml -o out/ --metric rel_rmse --target-error 0.01 --budget 600
-  pwc trade scene.toml -o out/ --knobs samples,dicing --ci"""
+  pwc trade scene.toml -o out/ --knobs samples,dicing --ci
+  pwc trade scene.toml -o out/ --cost cpu --workers 2"""
 
 
 def _families(text: str) -> set[str]:
@@ -95,8 +101,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "two options per knob")
     p.add_argument("--repeats", type=int, default=1, metavar="N",
                    help="time each run N times and keep the fastest (default 1)")
-    p.add_argument("--threads", type=int, default=2, metavar="N",
-                   help="worker threads per render (default 2)")
+    p.add_argument("--threads", type=int, metavar="N",
+                   help="threads per render (default 2; 1 on a cluster, where each worker "
+                        "process renders one run at a time)")
+    add_cluster_options(p, "measure the runs, one task each,")
     p.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     add_profiles_option(p)
     p.set_defaults(func=run)
@@ -124,13 +132,20 @@ def _command_line(args) -> str:
         words += ["--resolution", *map(str, args.resolution)]
     if args.repeats != 1:
         words += ["--repeats", str(args.repeats)]
+    for flag, value in (("--threads", args.threads), ("--workers", args.workers),
+                        ("--scheduler", args.scheduler)):
+        if value is not None:
+            words += [flag, str(value)]
     words += ["--ci"] if args.ci else []
     return " ".join(shlex.quote(str(w)) for w in words)
 
 
 def run(args) -> int:
     """Execute ``pwc trade`` with parsed arguments; returns the exit status."""
+    from contextlib import ExitStack
+
     from render.commands.render import _scene_file
+    from render.distributed import ClusterError, cluster
     from render.library.resources import search_paths
     from render.scene import SceneError, parse_scene
     from trade.knobs import ci_resolution
@@ -143,7 +158,7 @@ def run(args) -> int:
         return _error(f"--budget must be > 0 seconds, got {args.budget}", EXIT_USAGE)
     if args.reference_spp is not None and args.reference_spp < 1:
         return _error(f"--reference-spp must be >= 1, got {args.reference_spp}", EXIT_USAGE)
-    if args.threads < 1 or args.repeats < 1:
+    if (args.threads is not None and args.threads < 1) or args.repeats < 1:
         return _error(f"--threads and --repeats must be >= 1, got {args.threads} and "
                       f"{args.repeats}", EXIT_USAGE)
     if args.resolution and min(args.resolution) < 1:
@@ -165,15 +180,23 @@ def run(args) -> int:
             text = scene_path.read_text(encoding="utf-8")
             st = parse_scene(text, str(scene_path), base_dir=scene_path.parent).settings
             resolution = ci_resolution(st.width, st.height)
-        with search_paths(profile_dirs=[scene_path.parent, *args.profiles]):
+        with ExitStack() as stack:
+            stack.enter_context(search_paths(profile_dirs=[scene_path.parent, *args.profiles]))
+            client = None
+            if args.scheduler or args.workers:
+                client = stack.enter_context(cluster(args.scheduler, args.workers))
+                log("measuring each run as a task on the cluster "
+                    f"({len(client.nthreads())} workers now)")
             trade = run_trade(
                 scene_path, out, metric=args.metric, target=args.target_error, cost=args.cost,
                 knobs=args.knobs, budget=args.budget, size="ci" if args.ci else "full",
                 resolution=resolution, reference_spp=args.reference_spp,
                 reference=reference, fresh_reference=args.fresh_reference,
-                threads=args.threads, repeats=args.repeats,
-                progress=not args.quiet and sys.stderr.isatty(), log=log)
+                threads=args.threads or (2 if client is None else 1), repeats=args.repeats,
+                progress=not args.quiet and sys.stderr.isatty(), log=log, client=client)
         files = write_report(trade, out, _command_line(args))
+    except ClusterError as e:
+        return _error(str(e), EXIT_IO)
     except OSError as e:
         if isinstance(e, FileNotFoundError) and not scene_path.is_file():
             return _error(f"{scene_path}: cannot read the scene file: no such file", EXIT_IO)

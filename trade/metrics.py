@@ -66,8 +66,10 @@ def image_errors(test: np.ndarray, ref: np.ndarray) -> dict[str, float]:
 
     from render.film import linear_to_srgb
 
-    test = np.asarray(test, dtype=np.float64)
-    ref = np.asarray(ref, dtype=np.float64)
+    # aligned and contiguous: numpy sums misaligned data (as an array can arrive from a
+    # cluster's worker) in another order, and the mean would differ in its last bits
+    test = np.require(test, np.float64, ["C", "A"])
+    ref = np.require(ref, np.float64, ["C", "A"])
     if test.shape != ref.shape:
         raise ValueError(f"image of shape {test.shape} against a reference of {ref.shape}")
     rmse = float(np.sqrt(np.mean((test - ref) ** 2)))

@@ -12,6 +12,12 @@ for the cheapest combination that meets the target, the Pareto front.
 5. **Recommendation**: the fastest measured run that meets the target (never an
    unmeasured guess), written out as a scene file.
 
+With a Dask ``client`` the runs are tasks on its cluster (one run each,
+:func:`render.distributed.map_on_cluster`): the sweep's runs all at once, then the
+combination's one by one; the reference's chunks spread over the cluster
+(:func:`render.distributed.render_on_cluster`).  The images, errors and choices are
+the in-process ones; the times are measured on the workers (:mod:`trade.measure`).
+
 Every run renders with the scene's own seed, and the reference with another
 (:data:`REFERENCE_SEED_OFFSET` added), so runs that differ in one knob share their random
 numbers: their differences are the knob's, not the noise's; and the recommended scene
@@ -30,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from trade.knobs import describe, knobs_for, merge, patch_key, reference_patch
-from trade.measure import measure
+from trade.measure import measure, measure_shipped, ship
 from trade.metrics import METRICS, geometric_error, image_errors
 
 __all__ = ["Run", "Trade", "COSTS", "REFERENCE_SEED_OFFSET", "pareto_front", "run_trade"]
@@ -130,9 +136,11 @@ def _save_png(path: Path, image: np.ndarray) -> None:
 
 
 def reference_image(text: str, path: Path, out: Path, spp: int, given: Path | None,
-                    fresh: bool, resolution, threads: int, log) -> tuple[np.ndarray, dict]:
+                    fresh: bool, resolution, threads: int, log, client=None,
+                    progress: bool = False) -> tuple[np.ndarray, dict]:
     """The converged reference: ``given``, or the one kept in ``out`` for the same scene
-    and settings, or a new render (kept for the next run)."""
+    and settings, or a new render (kept for the next run; with a Dask ``client``, its
+    chunks on the cluster: the same image)."""
     from displacement.textures import read_texture, write_texture
     from render.scene import parse_scene, patch_scene_text
 
@@ -158,7 +166,16 @@ def reference_image(text: str, path: Path, out: Path, spp: int, given: Path | No
                 f"{info['wall_s']:.1f} s)")
             return read_texture(exr).data[..., :3], {**info, "reused": True, "patch": patch}
     log(f"rendering the reference: {spp} spp at {resolution[0]} x {resolution[1]}")
-    record, image = measure(ref_text, path, threads, seed)
+    if client is None:
+        record, image = measure(ref_text, path, threads, seed)
+    else:
+        from render.distributed import render_on_cluster
+
+        t0 = time.perf_counter()
+        film = render_on_cluster(parse_scene(ref_text, str(path), overrides={"seed": seed},
+                                             base_dir=path.parent), client, progress=progress)
+        image = film.rgb()
+        record = {"wall_s": time.perf_counter() - t0, "triangles": film.stats["triangles"]}
     image = image.astype(np.float32).astype(np.float64)  # as kept, so reruns compare alike
     write_texture(exr, image, bits="float")
     _save_png(out / "images" / "reference.png", image)
@@ -190,7 +207,7 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
               size: str = "full", resolution=None, reference_spp: int | None = None,
               reference: Path | None = None, fresh_reference: bool = False,
               threads: int = 2, repeats: int = 1, progress: bool = False,
-              log=print) -> Trade:
+              log=print, client=None) -> Trade:
     """Measure the trade of the scene file ``scene_path``; images go to ``out/images``.
 
     Parameters
@@ -218,6 +235,11 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
         A converged reference EXR to use instead of rendering one.
     repeats : int
         Time each run this many times and keep the fastest.
+    threads : int
+        Threads of each render.
+    client : distributed.Client, optional
+        Measure the runs as tasks on its Dask cluster (one run each; the tasks write
+        nothing), and render the reference's chunks there.
     """
     from render.scene import parse_scene, patch_scene_text
 
@@ -234,7 +256,8 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     names = [o.name for o in scene.objects]
     ref_spp = reference_spp or (64 if size == "ci" else max(256, 16 * scene.settings.spp))
     ref_image, ref_info = reference_image(text, scene_path, out, ref_spp, reference,
-                                          fresh_reference, res, threads, log)
+                                          fresh_reference, res, threads, log, client,
+                                          progress)
     try:
         import pyoidn  # noqa: F401
         denoiser = True
@@ -244,7 +267,10 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     exact = parse_scene(patch_scene_text(text, {**_resolution_patch(res)["render"],
                                                 "curves": "exact"}),
                         str(scene_path), base_dir=scene_path.parent)
-    _warm_up(text, scene_path, denoiser, threads)
+    if client is None:
+        _warm_up(text, scene_path, denoiser, threads)  # on a cluster: each worker, once
+    else:
+        _note_shared_workers(client, log)
     chosen = [k for k in all_knobs if knobs is None or k.family in knobs]
     base = _resolution_patch(res)
     runs: list[Run] = []
@@ -259,41 +285,74 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
 
         bar = tqdm(total=planned, unit="run", desc="trade", leave=False)
 
-    def run(label: str, family: str, patch: dict) -> Run | None:
-        full = merge(base, patch)
-        key = patch_key(full)
-        if key in seen:
-            return seen[key]
-        if budget is not None and runs and time.perf_counter() - sweep_start > budget:
-            skipped.append(label)
-            return None
-        run_text = patch_scene_text(text, full["render"], full["objects"])
-        record, image = measure(run_text, scene_path, threads)
-        for _ in range(repeats - 1):  # the fastest of several (a shared machine's noise)
-            again, _ = measure(run_text, scene_path, threads)
-            record["wall_s"] = min(record["wall_s"], again["wall_s"])
-            record["cpu_s"] = min(record["cpu_s"], again["cpu_s"])
-            record["render_s"] = min(record["render_s"], again["render_s"])
-        r = Run(len(runs), label, family, merge(patch), record, image_errors(image, ref_image))
-        gkey = patch_key(_geometry_patch(full))
-        if gkey not in geometric:  # measured only where the geometry changes
-            geometric[gkey] = _geometric(run_text, scene_path, exact)
-        r.geometric_px = geometric[gkey]
-        r.meets = r.error(metric) <= target
-        r.image = f"images/run_{r.index:03d}.png"
-        _save_png(out / r.image, image)
-        runs.append(r)
-        seen[key] = r
-        if bar is not None:
-            bar.update(1)
-        return r
+    warm_key = hashlib.sha256(f"{text}\0{res}".encode()).hexdigest()
 
-    baseline = run("the scene as written", "baseline", {"render": {}, "objects": {}})
-    for knob in chosen:
-        for option in knob.options:
-            r = run(option.label, knob.family, option.patch)
-            if r is not None:
-                r.record["knob"] = knob.name
+    def measured(texts: list[str], over):
+        """``(i, (record, image))`` of the run texts, in order: in-process one after
+        another until ``over()``; on the cluster all at once, the unfinished ones
+        cancelled once ``over()``."""
+        if client is None:
+            for i, run_text in enumerate(texts):
+                if over():
+                    return
+                yield i, measure(run_text, scene_path, threads, repeats=repeats)
+            return
+        from render.distributed import map_on_cluster
+
+        jobs = (ship(t, scene_path, threads, repeats, warm_key) for t in texts)
+        yield from map_on_cluster(client, measure_shipped, jobs, unit="run", stop=over,
+                                  progress=bar if bar is not None else False)
+
+    def batch(specs: list[tuple[str, str, dict]]) -> list[Run | None]:
+        """Measure the runs ``(label, family, patch)``; their Runs in order (a run of
+        settings measured before is that Run; None: skipped by the budget)."""
+        todo = []  # (spec index, full patch, key, scene text)
+        first: set[str] = set()  # the keys in todo
+        same: dict[int, str] = {}  # spec index -> the key of an earlier spec in the batch
+        for i, (_, _, patch) in enumerate(specs):
+            full = merge(base, patch)
+            key = patch_key(full)
+            if key in seen or key in first:
+                same[i] = key
+            else:
+                first.add(key)
+                todo.append((i, full, key, patch_scene_text(text, full["render"],
+                                                            full["objects"])))
+
+        def over() -> bool:
+            return budget is not None and bool(runs) and (
+                time.perf_counter() - sweep_start > budget)
+
+        got: list[Run | None] = [None] * len(specs)
+        for j, (record, image) in measured([t for *_, t in todo], over):
+            i, full, key, run_text = todo[j]
+            label, family, patch = specs[i]
+            r = Run(len(runs), label, family, merge(patch), record,
+                    image_errors(image, ref_image))
+            gkey = patch_key(_geometry_patch(full))
+            if gkey not in geometric:  # measured only where the geometry changes
+                geometric[gkey] = _geometric(run_text, scene_path, exact)
+            r.geometric_px = geometric[gkey]
+            r.meets = r.error(metric) <= target
+            r.image = f"images/run_{r.index:03d}.png"
+            _save_png(out / r.image, image)  # files are written here, never by a task
+            runs.append(r)
+            seen[key] = r
+            got[i] = r
+            if bar is not None and client is None:  # on a cluster: as its tasks finish
+                bar.update(1)
+        for i, key in same.items():
+            got[i] = seen.get(key)
+        skipped.extend(specs[i][0] for i, r in enumerate(got) if r is None)
+        return got
+
+    sweep = [(option.label, knob.family, option.patch, knob.name)
+             for knob in chosen for option in knob.options]
+    baseline, *swept = batch([("the scene as written", "baseline",
+                               {"render": {}, "objects": {}})] + [s[:3] for s in sweep])
+    for r, (*_, knob_name) in zip(swept, sweep, strict=True):
+        if r is not None:
+            r.record["knob"] = knob_name
     # the combination: per knob, its cheapest option that meets the target on its own;
     # from the one that saves most, each next one joins if the whole still meets it
     picks = []
@@ -305,8 +364,8 @@ def run_trade(scene_path: Path, out: Path, *, metric: str = "flip", target: floa
     picks.sort(key=lambda r: r.cost(cost))
     together = picks[:1]
     for p in picks[1:1 + COMBINE_ROUNDS]:
-        combo = run("combined: " + " + ".join(q.label for q in together + [p]), "combined",
-                    merge(*(q.patch for q in together + [p])))
+        combo, = batch([("combined: " + " + ".join(q.label for q in together + [p]),
+                         "combined", merge(*(q.patch for q in together + [p])))])
         if combo is not None and combo.meets:
             together.append(p)
     if bar is not None:
@@ -347,6 +406,17 @@ def _geometric(text: str, path: Path, exact) -> float | None:
         return None
     scene = parse_scene(text, str(path), base_dir=path.parent)
     return geometric_error(exact, scene.build())
+
+
+def _note_shared_workers(client, log) -> None:
+    """Say so when a worker runs several tasks at once: their runs then share its
+    process, and each run's CPU time and peak memory include its neighbours'."""
+    shared = {a: n for a, n in client.nthreads().items() if n > 1}
+    if shared:
+        address, n = next(iter(shared.items()))
+        log(f"worker {address} runs {n} tasks at once: the CPU time and peak memory of a "
+            "run there include the other runs'; start workers with `dask worker --nthreads "
+            "1` (docs/trade.md)")
 
 
 def _warm_up(text: str, path: Path, denoiser: bool, threads: int) -> None:

@@ -111,8 +111,6 @@ def run(args) -> int:
         return _error(f"--time must be > 0 seconds, got {args.time}", EXIT_USAGE)
     if args.threads is not None and args.threads < 1:
         return _error(f"--threads must be >= 1, got {args.threads}", EXIT_USAGE)
-    if args.workers is not None and args.workers < 1:
-        return _error(f"--workers must be >= 1, got {args.workers}", EXIT_USAGE)
     if args.chunks_per_task is not None and args.chunks_per_task < 1:
         return _error(f"--chunks-per-task must be >= 1, got {args.chunks_per_task}", EXIT_USAGE)
     if not str(args.output).lower().endswith(".exr"):

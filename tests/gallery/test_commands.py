@@ -1,16 +1,20 @@
-"""``pwc gallery render|check|sheet``: what they write, print and return."""
+"""``pwc gallery render|check|sheet``: what they write, print and return; in-process and
+with each figure a task on a real Dask cluster of worker processes."""
 
 from __future__ import annotations
 
 import argparse
+import re
 import shutil
 import tomllib
 
 import numpy as np
+import pytest
 from PIL import Image
 from repo import ROOT, run_pwc
 
 from gallery import commands, compare
+from render.distributed import cluster
 from render.film import read_exr, write_exr_channels
 
 FIGURE = "13.3"  # diffuse, compiled path: the cheapest figure of the stage
@@ -33,6 +37,8 @@ def test_the_command_is_registered_and_every_level_has_help():
     for sub in ("render", "check", "sheet"):
         r = run_pwc("gallery", sub, "--help")
         assert r.returncode == 0 and "FIGURE" in r.stdout and "example" in r.stdout, sub
+        assert "--workers N" in r.stdout and "--scheduler ADDRESS" in r.stdout, sub
+        assert "one task each" in r.stdout, sub
 
 
 def test_render_writes_each_figure_at_the_size_asked(tmp_path, capsys):
@@ -103,3 +109,63 @@ def test_sheet_writes_the_page_and_its_images(capsys, tmp_path):
         assert (page.parent / "sheet" / f"{name}.png").is_file()
         assert (page.parent / "sheet" / f"{name}_flip.png").is_file()
     assert "wrote" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ on a Dask cluster
+TWO = ("13.3", "14.3")
+TWO_NAMES = (NAME, "fig_14_03")
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """The address of a running local cluster of two worker processes, one thread each."""
+    with cluster(workers=2) as client:
+        yield client.scheduler.address
+
+
+def _timeless(text: str) -> str:
+    """Command output without its times (``0.1 s``, ``  0.4s``)."""
+    return re.sub(r"\d+\.\d ?s\b", "T", text)
+
+
+def test_render_on_two_workers_writes_the_in_process_images(tmp_path, capsys):
+    """``--workers 2``: the command's own local cluster, each figure one task; the client
+    writes bit-identical files and prints the same lines in the same order."""
+    common = ("render", *TWO, "--resolution", 40, 30, "--spp", 3, "--seed", 5)
+    assert pwc_gallery(*common, "-o", tmp_path / "here") == 0
+    here = capsys.readouterr().err
+    assert pwc_gallery(*common, "-o", tmp_path / "there", "--workers", 2) == 0
+    there = capsys.readouterr().err
+    for name in TWO_NAMES:
+        a, b = (read_exr(tmp_path / d / f"{name}.exr")["RGBA"] for d in ("here", "there"))
+        assert a.shape == (30, 40, 4) and a.max() > 0 and np.array_equal(a, b), name
+        assert ((tmp_path / "here" / f"{name}.png").read_bytes()
+                == (tmp_path / "there" / f"{name}.png").read_bytes()), name
+    lines = [line for line in there.splitlines() if line.startswith("Figure")]
+    assert [line.split()[1] for line in lines] == list(TWO)
+    assert _timeless(here).replace("here", "there") == _timeless(there)
+
+
+def test_check_on_a_running_cluster_prints_the_in_process_table(scheduler, tmp_path, capsys):
+    """``--scheduler ADDRESS``: each check (render and judge) one task; the table is the
+    in-process one but for the times, the saved images the same bits."""
+    assert pwc_gallery("check", *TWO, "--save", tmp_path / "here") == 0
+    here = capsys.readouterr().out
+    assert pwc_gallery("check", *TWO, "--save", tmp_path / "there", "--scheduler",
+                       scheduler) == 0
+    there = capsys.readouterr().out
+    assert "2 of 2 figures pass" in there and there.index("13.3") < there.index("14.3")
+    assert _timeless(here) == _timeless(there)
+    for name in TWO_NAMES:
+        for tag in ("img", "ref", "err"):
+            a, b = (read_exr(tmp_path / d / f"{name}_{tag}.exr")["RGB"] for d in ("here", "there"))
+            assert np.array_equal(a, b), (name, tag)
+
+
+def test_cluster_options_are_checked(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        pwc_gallery("render", FIGURE, "-o", tmp_path, "--workers", 0)
+    assert e.value.code == 2 and "--workers must be >= 1, got 0" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        pwc_gallery("check", FIGURE, "--workers", 2, "--scheduler", "tcp://127.0.0.1:1")
+    assert e.value.code == 2 and "not allowed with argument" in capsys.readouterr().err

@@ -1,7 +1,8 @@
 """Rendering on a real Dask cluster of worker processes on this machine (issue 15): the
 image bit-identical to the in-process one whatever the workers, the scene shipped once
 per worker with what its files gave it, a worker killed mid-render, the time budget,
-``pwc render --workers/--scheduler``, and the errors a user can meet."""
+``pwc render --workers/--scheduler``, the errors a user can meet, and whole scenes as
+tasks (:func:`render.distributed.map_on_cluster`, for ``pwc gallery`` and ``pwc trade``)."""
 
 from __future__ import annotations
 
@@ -13,13 +14,14 @@ import subprocess
 import sys
 import threading
 import time
+from functools import partial
 
 import numpy as np
 import pytest
 from repo import ROOT, checkout_env, run_pwc
 
 from render import distributed
-from render.distributed import ClusterError, cluster, render_on_cluster
+from render.distributed import ClusterError, cluster, map_on_cluster, render_on_cluster
 from render.film import read_exr
 from render.integrator import render
 from render.passes import PassPlan
@@ -218,19 +220,17 @@ def test_time_budget_holds_across_workers(client2, tmp_path):
     assert np.array_equal(film.rgb(), ref.rgb())
 
 
-def test_a_killed_worker_changes_nothing(tmp_path):
-    """SIGKILL a worker process while it renders chunks: the scheduler runs them again
-    on the other worker (and its nanny restarts it), and the image is the same."""
-    (tmp_path / "s.toml").write_text(MANY_CHUNKS)
-    scene = load_scene(tmp_path / "s.toml")
-    want = render(scene, progress=False)
+def _kill_a_worker_during(work, key_part: str):
+    """Run ``work(client)`` on a new local cluster of two workers, SIGKILL the first
+    worker seen running a task whose key holds ``key_part``, and return what ``work``
+    returned (it must not fail) and the dead worker's address."""
     with cluster(workers=2) as client:
         pids = client.run(os.getpid)
         result = {}
 
         def run():
             try:
-                result["film"] = render_on_cluster(scene, client, progress=False)
+                result["value"] = work(client)
             except Exception as e:  # noqa: BLE001 - reported by the assertion below
                 result["error"] = e
 
@@ -239,16 +239,26 @@ def test_a_killed_worker_changes_nothing(tmp_path):
         victim, deadline = None, time.monotonic() + 300
         while victim is None and time.monotonic() < deadline and thread.is_alive():
             for address, keys in client.processing().items():
-                if any("-chunks-" in str(k) for k in keys) and address in pids:
+                if any(key_part in str(k) for k in keys) and address in pids:
                     victim = address
                     break
-            time.sleep(0.02)
-        assert victim is not None, "no worker was seen rendering a chunk"
+            time.sleep(0.01)
+        assert victim is not None, f"no worker was seen running a task {key_part!r}"
         os.kill(pids[victim], signal.SIGKILL)
         thread.join(timeout=600)
         assert not thread.is_alive()
     assert "error" not in result, result.get("error")
-    film = result["film"]
+    return result["value"], victim
+
+
+def test_a_killed_worker_changes_nothing(tmp_path):
+    """SIGKILL a worker process while it renders chunks: the scheduler runs them again
+    on the other worker (and its nanny restarts it), and the image is the same."""
+    (tmp_path / "s.toml").write_text(MANY_CHUNKS)
+    scene = load_scene(tmp_path / "s.toml")
+    want = render(scene, progress=False)
+    film, victim = _kill_a_worker_during(
+        lambda client: render_on_cluster(scene, client, progress=False), "-chunks-")
     assert np.array_equal(film.rgb(), want.rgb()) and np.array_equal(film.spp, want.spp)
     plan = PassPlan.of(scene.settings, 64 * 64)
     # every chunk came back once; the dead worker's unfinished ones from another worker
@@ -364,3 +374,47 @@ def test_cluster_errors_are_messages(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="not both or neither"):
         with cluster():
             pass
+
+
+# ---------------------------------------------------------------------- whole tasks
+def test_whole_tasks_come_back_in_order_and_stop_on_request(client2):
+    """Results in the jobs' order whatever order the tasks finish in; a task's error as
+    it raised it; ``stop`` cancels the unfinished tasks and keeps the finished ones."""
+
+    def slow(job):  # a local function travels by value (cloudpickle)
+        import time
+
+        seconds, value = job
+        if value is None:
+            raise ValueError("no value")
+        time.sleep(seconds)
+        return value
+
+    jobs = [(0.6, "a"), (0.0, "b"), (0.3, "c"), (0.0, "d")]
+    assert list(map_on_cluster(client2, slow, jobs, progress=True)) == [
+        (0, "a"), (1, "b"), (2, "c"), (3, "d")]
+    with pytest.raises(ValueError, match="no value"):
+        list(map_on_cluster(client2, slow, [(0.0, "a"), (0.0, None)], progress=False))
+    start = time.monotonic()  # (the last test of client2: the cancelled sleeps go on)
+    got = list(map_on_cluster(client2, slow, [(10.0, "late"), (0.0, "b"), (10.0, "never")],
+                              progress=False, stop=lambda: True))
+    assert got == [(1, "b")] and time.monotonic() - start < 8
+    deadline = time.monotonic() + 20  # and the scheduler has forgotten them
+    while any(client2.processing().values()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(client2.processing().values())
+
+
+def test_a_scene_whose_worker_dies_is_rendered_again_elsewhere(tmp_path):
+    """Whole scenes as tasks (``pwc gallery``'s figures): SIGKILL the worker rendering
+    one; the scheduler runs the task again on another worker and the images are the
+    in-process ones."""
+    (tmp_path / "s.toml").write_text(MANY_CHUNKS.replace("spp = 1024", "spp = 256"))
+    scenes = [load_scene(tmp_path / "s.toml", overrides={"seed": s}) for s in (1, 2)]
+    want = [render(scene, progress=False).rgb() for scene in scenes]
+    task = partial(render, progress=False, threads=1)
+    films, _ = _kill_a_worker_during(lambda client: dict(map_on_cluster(
+        client, task, scenes, progress=False, unit="scene")), "pwc-scene-")
+    assert sorted(films) == [0, 1]
+    for i, image in enumerate(want):
+        assert np.array_equal(films[i].rgb(), image), i

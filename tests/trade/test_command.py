@@ -15,6 +15,7 @@ from repo import ROOT, run_pwc
 from displacement.textures import read_texture
 from render.film import read_exr
 from trade.metrics import image_errors
+from trade.sweep import run_trade
 
 SCENE = ROOT / "gallery" / "scenes" / "fig_14_28.toml"
 
@@ -38,7 +39,8 @@ def report(tmp_path_factory):
 def test_help():
     r = run_pwc("trade", "--help")
     assert r.returncode == 0
-    for word in ("--target-error", "--budget", "--knobs", "--metric", "Pareto", "reference"):
+    for word in ("--target-error", "--budget", "--knobs", "--metric", "Pareto", "reference",
+                 "--workers N", "--scheduler ADDRESS", "one task each"):
         assert word in r.stdout
 
 
@@ -101,7 +103,8 @@ def test_the_report_opens_in_a_headless_browser(report):
     (["--budget", "-1"], 2, "--budget must be > 0"),
     (["--knobs", "spp"], 2, "unknown knob family 'spp'"),
     (["--reference", "missing.exr"], 3, "missing.exr: no such file"),
-], ids=["target", "budget", "knobs", "reference"])
+    (["--workers", "0"], 2, "--workers must be >= 1, got 0"),
+], ids=["target", "budget", "knobs", "reference", "workers"])
 def test_bad_command_lines_fail_clearly(args, status, words, tmp_path):
     r = run_pwc("trade", SCENE, "-o", tmp_path / "out", *args, cwd=tmp_path)
     assert r.returncode == status and words in r.stderr and "Traceback" not in r.stderr
@@ -121,3 +124,33 @@ def test_an_unwritable_report_folder_fails_before_any_render(tmp_path):
     r = run_pwc("trade", SCENE, "-o", blocker / "out", "--ci")
     assert r.returncode == 3 and "is a file, not a folder" in r.stderr
     assert not np.any([p.suffix == ".exr" for p in tmp_path.rglob("*")])
+
+
+def test_runs_on_two_workers_measure_the_in_process_errors(tmp_path):
+    """``--workers 2``: each run a task on a local cluster of two processes, timed on its
+    worker; the reference is the same image, and every run the same errors (the images
+    are deterministic given the seeds).  Which combinations are tried depends on the
+    times, so only the runs of both are compared."""
+    knobs = {"samples", "displacement"}
+    (tmp_path / "here").mkdir()
+    here = run_trade(SCENE, tmp_path / "here", size="ci", resolution=(16, 12), knobs=knobs,
+                     log=lambda *a: None)
+    r = run_pwc("trade", SCENE, "-o", tmp_path / "there", "--ci", "--resolution", 16, 12,
+                "--knobs", "samples,displacement", "--workers", 2)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert "measuring each run as a task on the cluster" in r.stderr
+    there = json.loads((tmp_path / "there" / "runs.json").read_text())
+    assert np.array_equal(read_texture(tmp_path / "here" / "reference.exr").data,
+                          read_texture(tmp_path / "there" / "reference.exr").data)
+    theirs = {run["label"]: run for run in there["runs"]}
+    swept = [run for run in here.runs if run.family != "combined"]
+    assert len(swept) >= 4 and {run.label for run in swept} == {
+        label for label, run in theirs.items() if run["family"] != "combined"}
+    for run in here.runs:
+        if run.label in theirs:
+            assert theirs[run.label]["errors"] == run.errors, run.label
+            assert theirs[run.label]["geometric_px"] == run.geometric_px, run.label
+    for run in there["runs"]:  # timed on the worker, reading the scene on the client
+        assert 0 < run["read_s"] < run["wall_s"] and run["cpu_s"] > 0 and run["rays"] > 0
+        assert run["peak_mb"] >= 0
+    assert "--workers 2" in (tmp_path / "there" / "report.md").read_text()
