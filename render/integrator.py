@@ -104,14 +104,6 @@ _LIGHT_KINDS = {
 }
 
 
-def _fast_unit(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit rows of interpolated attribute vectors: ``(u, valid)``; rows shorter than
-    1e-150 are left as they are and ``valid = False``."""
-    length = np.sqrt(dot(v, v))
-    ok = length > 1e-150
-    return v / np.where(ok, length, 1.0)[:, None], ok
-
-
 def _straight_through_candidate(material, two_faced: bool) -> bool:
     """Whether a material's surface(s) may pass light straight through without a vertex:
     ``specular_bsdf`` with a transmitting mode (straight when index-matched or thin)."""
@@ -405,12 +397,11 @@ class Integrator:
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
-        """World position, unit shading normal, unit tangents and uv at hit points."""
-        p, n, tu, tv, uv = self.geo.interpolate(face, b1, b2)
-        ns, ok = _fast_unit(n)
-        if not np.all(ok):
-            ns = np.where(ok[:, None], ns, self.geo.face_normal[face])
-        return p, ns, _fast_unit(tu)[0], _fast_unit(tv)[0], uv
+        """World position, unit shading normal, unit tangents and uv at hit points (the
+        bounce kernel's own interpolation, :func:`render.path.hit_attributes`)."""
+        a = np.empty((len(face), 14))
+        kern.hit_attributes(self.geo.packed, self.geo.faces, self.geo.face_normal, face, b1, b2, a)
+        return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12], a[:, 12:14]
 
     def _object_state(self, k: int, p, ns, tu, tv, uv):
         """The object-space ShadingState of lanes of object ``k`` from world attributes."""

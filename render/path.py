@@ -426,8 +426,8 @@ def _roulette(b0, b1, b2, mis, u):
 
 @njit(inline="always")
 def _attributes(packed, faces, face_normal, f, w1, w2):
-    """Position, unit shading normal (the face's where it degenerates), unit tangent and
-    uv at barycentrics (w1, w2) of triangle ``f``."""
+    """Position, unit shading normal (the face's where it degenerates), unit tangents u
+    and v, and uv at barycentrics (w1, w2) of triangle ``f``."""
     tp = packed
     v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
     w0 = 1.0 - w1 - w2
@@ -446,9 +446,24 @@ def _attributes(packed, faces, face_normal, f, w1, w2):
         w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
         w0 * tp[v0, 8] + w1 * tp[v1, 8] + w2 * tp[v2, 8],
     )
+    bx, by, bz, _ = _fast_unit(
+        w0 * tp[v0, 9] + w1 * tp[v1, 9] + w2 * tp[v2, 9],
+        w0 * tp[v0, 10] + w1 * tp[v1, 10] + w2 * tp[v2, 10],
+        w0 * tp[v0, 11] + w1 * tp[v1, 11] + w2 * tp[v2, 11],
+    )
     u = w0 * tp[v0, 12] + w1 * tp[v1, 12] + w2 * tp[v2, 12]
     v = w0 * tp[v0, 13] + w1 * tp[v1, 13] + w2 * tp[v2, 13]
-    return px, py, pz, nx, ny, nz, tx, ty, tz, u, v
+    return px, py, pz, nx, ny, nz, tx, ty, tz, bx, by, bz, u, v
+
+
+@njit
+def hit_attributes(packed, faces, face_normal, f, b1, b2, out):
+    """:func:`_attributes` of hits ``f``, ``b1``, ``b2`` (n,) into ``out`` (n, 14):
+    position, unit normal, unit tangents u and v, uv (for the lanes shaded with numpy)."""
+    for i in range(len(f)):
+        a = _attributes(packed, faces, face_normal, f[i], b1[i], b2[i])
+        for c in range(14):
+            out[i, c] = a[c]
 
 
 def scratch(tb) -> np.ndarray:
@@ -642,7 +657,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # ---- a surface
         k = face_object[f]
         flags = obj_flags[k]
-        px, py, pz, nx, ny, nz, tx, ty, tz, uu, uv = _attributes(
+        px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
             packed, faces, face_normal, f, hb1[i], hb2[i])
         gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
         g_wo = -_dot(dx, dy, dz, gx, gy, gz)
@@ -864,7 +879,7 @@ def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, p
         front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
         v = lane_row[i]
         slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
-        px, py, pz, nx, ny, nz, tx, ty, tz, _, _ = _attributes(
+        px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, _, _ = _attributes(
             packed, faces, face_normal, f, hb1[i], hb2[i])
         row = slot
         if v >= 0:

@@ -484,31 +484,6 @@ class Geometry:
     def triangle_count(self) -> int:
         return len(self.faces)
 
-    def interpolate(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
-        """Attributes at points of triangles (Embree's barycentrics ``u``, ``v``).
-
-        Parameters
-        ----------
-        face : (n,) int64
-            Global triangle indices.
-        b1, b2 : (n,) float64
-            ``p = (1 - b1 - b2) v0 + b1 v1 + b2 v2``.
-
-        Returns
-        -------
-        position, normal, tangent_u, tangent_v : (n, 3) float64
-            World space; normal and tangents not renormalised.
-        uv : (n, 2) float64
-        """
-        f = self.faces[face]
-        b0 = 1.0 - b1 - b2
-        table = self.packed
-        # one gather per corner of all 14 attribute columns
-        a = b0[:, None] * table[f[:, 0]]
-        a += b1[:, None] * table[f[:, 1]]
-        a += b2[:, None] * table[f[:, 2]]
-        return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12], a[:, 12:14]
-
     @property
     def packed(self) -> np.ndarray:
         """(v, 14) float64: positions, normals, tangent_u, tangent_v, uv side by side."""
