@@ -97,7 +97,9 @@ if _RenderCacheLocator not in CacheImpl._locator_classes:
 def njit(function=None, allocates: bool = False, **options):
     """``numba.njit`` with the package's defaults: ``nogil=True`` (both cores shade at
     once), ``cache=True`` (in :func:`cache_dir`) for functions defined in the package,
-    and no reference counting unless ``allocates``.  Use bare or with options.
+    numpy's error model (IEEE division: the kernels guard their own divisions, and
+    Python's zero-division checks cost a branch per division), and no reference
+    counting unless ``allocates``.  Use bare or with options.
 
     A kernel that only reads and writes arrays it is given needs no reference counts;
     numba's would cost an atomic increment and decrement per array argument per call
