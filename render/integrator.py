@@ -63,6 +63,7 @@ Embree release the GIL).  Same seed, same image.
 
 from __future__ import annotations
 
+import threading
 import time as _time
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
@@ -254,6 +255,7 @@ class Integrator:
         self.tables, self.params = self._tables(const_emit, obj_medium)
         self.embree_time = 0.0
         self.rays = 0
+        self._count_lock = threading.Lock()  # two threads trace chunks at once
         # compile (or load from numba's cache) before worker threads start
         self.trace(np.zeros(1, dtype=np.int64), np.random.default_rng(0))
 
@@ -594,8 +596,7 @@ class Integrator:
         while n:
             t0 = _time.perf_counter()
             kern.intersect(self.scene_handle, self.tables, lf, n, face, b1, b2, t)
-            self.embree_time += _time.perf_counter() - t0
-            self.rays += n
+            self._count(n, _time.perf_counter() - t0)
             rng.random(out=u[:n])
             tables, params, lane_row, bf, bslot = self._bind(
                 face[:n], b1[:n], b2[:n], lf[:n, kern.D:kern.D + 3], so, sior, li[:n, kern.NSTK])
@@ -638,8 +639,7 @@ class Integrator:
         while ns:
             t0 = _time.perf_counter()
             kern.shadow_trace(self.scene_handle, self.tables, cur[0], ns, any_pass, face, b1, b2, t)
-            self.embree_time += _time.perf_counter() - t0
-            self.rays += ns
+            self._count(ns, _time.perf_counter() - t0)
             tables, params, (lane_row, bf, bslot) = self.tables, self.params, none
             u = t  # not read: no cutouts
             if any_pass:
@@ -650,6 +650,12 @@ class Integrator:
             ns = kern.shadow_resolve(tables, ns, *cur, face, b1, b2, t, u, lane_row, params, bf,
                                      bslot, L, *nxt, kern.scratch(tables))
             cur, nxt = nxt, cur
+
+    def _count(self, rays: int, seconds: float) -> None:
+        """Add to the rays traced and the time inside Embree (threads share them)."""
+        with self._count_lock:
+            self.rays += rays
+            self.embree_time += seconds
 
     @property
     def scene_handle(self) -> int:
