@@ -178,6 +178,32 @@ def _varying(material) -> bool:
     return False
 
 
+def _luminance(rgb):
+    """Luminance of linear RGB (..., 3)."""
+    return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
+
+
+def _mean_radiance(env) -> float:
+    """An environment's radiance (luminance) averaged over the sphere: exact for a
+    constant or a lat-long map, by 4096 importance samples for the sun and sky."""
+    if isinstance(env, ConstantEnvironment):
+        return float(_luminance(env.radiance))
+    if isinstance(env, LatLongEnvironment):
+        rows = np.arange(env.h)
+        solid = (np.cos(np.pi * rows / env.h) - np.cos(np.pi * (rows + 1) / env.h)) / (2 * env.w)
+        return float((_luminance(env.image) * solid[:, None]).sum())
+    from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
+
+    params, u = env.kernel_params(), np.random.default_rng(0).random((4096, 2))
+    total = 0.0
+    for a, b in u:
+        d = sun_and_sky_sample(params, env._p, env._cdf, a, b)
+        pdf = sun_and_sky_pdf(params, env._p, d[0], d[1], d[2])
+        if pdf > 0.0:
+            total += float(_luminance(sun_and_sky_eval(params, d[0], d[1], d[2]))) / pdf
+    return total / (4096 * 4.0 * np.pi)
+
+
 class Integrator:
     """A path tracer for one built scene.
 
@@ -212,9 +238,6 @@ class Integrator:
         for light in self.lights.lights:
             if type(light) not in _LIGHT_KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
-        self.area_pdf = np.zeros(n_obj)
-        for k, light in self.lights.area_by_object.items():
-            self.area_pdf[k] = light.pdf_area * self.lights.select_pdf
         mats = [o.material for o in self.objects]
         self.cutout = np.array([_has_cutout(m) for m in mats], dtype=bool)
         # thin-walled materials with their own backface are shaded per side
@@ -374,7 +397,11 @@ class Integrator:
         else:
             sky_params, sky_p, sky_cdf = sky.kernel_params(), sky._p, sky._cdf
         scalars = np.zeros(kern.N_SCALARS)
-        scalars[kern.SC_SELECT] = self.lights.select_pdf
+        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[self.settings.light_selection])
+        env_index = [j for j, light in enumerate(lights) if light.infinite]
+        scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
+        object_light = np.full(n_obj, -1, dtype=np.int64)
+        object_light[light_object[light_object >= 0]] = np.flatnonzero(light_object >= 0)
         scalars[kern.SC_EPS] = self.eps
         scalars[kern.SC_MAX_DEPTH] = float(self.max_depth)
         scalars[kern.SC_RR_DEPTH] = float(self.settings.rr_depth)
@@ -395,13 +422,65 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit, emit_light,
-            np.asarray(self.area_pdf, dtype=np.float64), media, phase,
+            object_light, media, phase,
             kinds, light_object, light_params, light_first,
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
-            pdf_area, env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
+            pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
         return tables, params
+
+    def _light_bounds(self, kinds, emit_light, flags):
+        """(l, NLB) what each light can contribute (:func:`render.path._importance`):
+        bounding sphere, emission cone, intensity (area lights: mean radiance x area,
+        directional: irradiance, environments: pi x mean radiance; luminance) and power
+        (pbrt-v4's ``Light::Phi``: pi L A, 4 pi I, a spot's cone, pi r^2 E for a directional
+        light and pi L x pi r^2 for an environment, r the scene's bounding radius)."""
+        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
+        disk = np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
+        out = np.zeros((len(kinds), kern.NLB))
+        for j, light in enumerate(self.lights.lights):
+            kind = kinds[j]
+            if kind == kern.AREA:
+                c = light.corners.reshape(-1, 3)
+                a, b = c.min(axis=0), c.max(axis=0)
+                out[j, kern.LB_C:kern.LB_C + 3] = 0.5 * (a + b)
+                out[j, kern.LB_R] = 0.5 * float(np.linalg.norm(b - a))
+                area = 0.5 * np.linalg.norm(np.cross(light.corners[:, 1] - light.corners[:, 0],
+                                                     light.corners[:, 2] - light.corners[:, 0]),
+                                            axis=1)
+                k = light.object_id
+                axis = (area[:, None] * light.normals).sum(axis=0)
+                length = float(np.linalg.norm(axis))
+                cos_o = -1.0  # two-sided or varying emission: no cone
+                const = bool(flags[k] & kern.EMIT_CONST)
+                if const and length > 1e-9 * light.area:
+                    axis = axis / length
+                    cos_o = float(np.min(light.normals @ axis))
+                    out[j, kern.LB_AXIS:kern.LB_AXIS + 3] = axis
+                out[j, kern.LB_COS] = cos_o
+                if const:
+                    radiance = float(_luminance(emit_light[k]))
+                else:  # varying: its radiance at the triangles' centroids toward their normals
+                    third = np.full((len(light.faces), 3), 1.0 / 3.0)
+                    rad = _luminance(light.emission(light.faces, third, light.normals))
+                    radiance = float((rad * area).sum() / light.area)
+                out[j, kern.LB_I] = radiance * light.area
+                out[j, kern.LB_PHI] = np.pi * radiance * light.area
+            elif kind in (kern.POINT, kern.SPOT):
+                intensity = _luminance(light.intensity)
+                out[j, kern.LB_C:kern.LB_C + 3] = light.position
+                out[j, kern.LB_I] = intensity
+                cone = 2.0 if kind == kern.POINT else (
+                    (1.0 - light.cos_width) + 0.5 * (light.cos_width - light.cos_cutoff))
+                out[j, kern.LB_PHI] = 2.0 * np.pi * cone * intensity
+            elif kind == kern.DIRECTIONAL:
+                out[j, kern.LB_I] = _luminance(light.irradiance)
+                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
+            else:
+                out[j, kern.LB_I] = np.pi * _mean_radiance(light)
+                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
+        return out
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):

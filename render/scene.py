@@ -169,6 +169,10 @@ class RenderSettings:
     dice_invisible : bool
         Dice every displaced object.  By default (False) a displacement the camera
         cannot see is not diced (:meth:`Scene.build`).
+    light_selection : {"contribution", "power", "uniform"}
+        How next-event estimation picks a light at a vertex
+        (:func:`render.path.select_light`): by a bound on what each light can contribute
+        there (distance, orientation, power), by power alone, or uniformly.
     """
 
     width: int = 256
@@ -186,6 +190,7 @@ class RenderSettings:
     texture_filter: str = "bilinear"
     denoise: bool = False
     dice_invisible: bool = False
+    light_selection: str = "contribution"
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -221,6 +226,9 @@ class RenderSettings:
         if self.texture_filter not in FILTERS:
             raise ValueError(f"texture_filter must be one of {', '.join(map(repr, FILTERS))}, "
                              f"got {self.texture_filter!r}")
+        if self.light_selection not in ("contribution", "power", "uniform"):
+            raise ValueError("light_selection must be one of 'contribution', 'power', "
+                             f"'uniform', got {self.light_selection!r}")
         for name in ("denoise", "dice_invisible"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
@@ -1027,6 +1035,7 @@ class _Parser:
             "texture_filter",
             "denoise",
             "dice_invisible",
+            "light_selection",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -1058,6 +1067,7 @@ class _Parser:
             "texture_filter",
             "denoise",
             "dice_invisible",
+            "light_selection",
         ):
             if key in t:
                 setattr(s, key, t[key])
