@@ -235,6 +235,12 @@ class Integrator:
                 lights.append(AreaLight(k, faces, corners, geometry.face_normal[faces],
                                         self._emission_fn(k)))
         self.lights = LightSet(lights)
+        n_delta = sum(light.delta for light in self.lights.lights)
+        #: delta lights sampled at every vertex besides the selected light (their shadow
+        #: records: up to 1 + n_delta per lane)
+        self.every_delta = bool(self.settings.every_delta_light and
+                                0 < n_delta <= kern.MAX_EVERY_DELTA)
+        self.shadow_rows = 1 + (n_delta if self.every_delta else 0)
         for light in self.lights.lights:
             if type(light) not in _LIGHT_KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
@@ -397,7 +403,8 @@ class Integrator:
         else:
             sky_params, sky_p, sky_cdf = sky.kernel_params(), sky._p, sky._cdf
         scalars = np.zeros(kern.N_SCALARS)
-        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[self.settings.light_selection])
+        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[self.settings.light_selection]
+                                        + (kern.EVERY_DELTA if self.every_delta else 0))
         env_index = [j for j, light in enumerate(lights) if light.infinite]
         scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
         object_light = np.full(n_obj, -1, dtype=np.int64)
@@ -675,7 +682,7 @@ class Integrator:
         # buffers reused from segment to segment (fresh ones would cost page faults):
         # lane state in and out, shadow records in and out, hits and random numbers
         nxt = (np.empty_like(lf), np.empty_like(li), np.empty_like(so), np.empty_like(sior))
-        shadow = self._shadow_buffers(n)
+        shadow = self._shadow_buffers(n * self.shadow_rows)
         face = np.empty(n, dtype=np.int64)
         b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
         u = np.empty((n, 9))

@@ -104,6 +104,10 @@ AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP, SUN_AND_SKY = 0, 1
 #: ``[render] light_selection`` (``scalars[SC_SELECT]``)
 UNIFORM, POWER, CONTRIBUTION = 0, 1, 2
 SELECTIONS = {"uniform": UNIFORM, "power": POWER, "contribution": CONTRIBUTION}
+#: added to the mode: every delta light is sampled at every vertex, outside the selection
+EVERY_DELTA = 4
+#: at most this many delta lights are sampled at every vertex (more: selected)
+MAX_EVERY_DELTA = 4
 #: ``light_bounds`` columns: bounding-sphere centre and radius, emission cone axis and
 #: cos of its half-angle (area lights), intensity (the importance's numerator, see
 #: :func:`_importance`), power (pbrt's ``PowerLightSampler``)
@@ -268,6 +272,20 @@ def _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz):
 
 
 @njit(inline="always")
+def _is_delta(kind):
+    return kind == POINT or kind == SPOT or kind == DIRECTIONAL
+
+
+@njit(inline="always")
+def _next_delta(light_kind, j):
+    """The first delta light after light ``j`` (-1: none)."""
+    for k in range(j + 1, len(light_kind)):
+        if _is_delta(light_kind[k]):
+            return k
+    return -1
+
+
+@njit(inline="always")
 def _spot_falloff(lp, j, c):
     """Spot ``j``'s falloff at cosine ``c`` from its axis: smoothstep between the cosines
     of the cutoff and the beam width, 0 outside the cutoff."""
@@ -290,8 +308,16 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
     sphere (0 only where p is behind every triangle of a one-sided emitter, or outside a
     spot's cutoff: where the light gives nothing) times the bounded cosine at the
     receiver (at least COS_FLOOR).  Directional lights: irradiance times that cosine;
-    environments: pi times their mean radiance (4 pi in a medium)."""
+    environments: pi times their mean radiance (4 pi in a medium).
+
+    ``mode + EVERY_DELTA``: the same, delta lights 0 (each is sampled at every vertex,
+    outside the selection)."""
     lb = light_bounds
+    kind = light_kind[j]
+    if mode >= EVERY_DELTA:
+        if _is_delta(kind):
+            return 0.0
+        mode -= EVERY_DELTA
     if mode == UNIFORM:
         return 1.0
     if mode == POWER:
@@ -299,7 +325,6 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
     intensity = lb[j, LB_I]
     if not intensity > 0.0:
         return 0.0
-    kind = light_kind[j]
     surface = nx != 0.0 or ny != 0.0 or nz != 0.0
     if kind == ENVIRONMENT or kind == ENVIRONMENT_MAP or kind == SUN_AND_SKY:
         return intensity if surface else 4.0 * intensity
@@ -323,13 +348,20 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
         if not cos_e > 0.0:
             return 0.0
     elif kind == AREA and not inside and lb[j, LB_COS] > -1.0:
-        # theta' = max(0, theta_w - theta_o - theta_b) >= pi/2 (+ a margin): p is behind
-        theta_w = math.acos(min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1],
-                                         lb[j, LB_AXIS + 2]), -1.0), 1.0))
-        theta = theta_w - math.acos(min(max(lb[j, LB_COS], -1.0), 1.0)) - math.asin(sin_b)
-        if theta > 0.5 * np.pi + 1e-6:
+        # cos theta', theta' = max(0, theta_w - theta_o - theta_b): 0 (p behind) below
+        # -1e-6, a margin for rounding
+        cw = min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1], lb[j, LB_AXIS + 2]),
+                     -1.0), 1.0)
+        co = lb[j, LB_COS]
+        c = 1.0
+        if cw < co:  # theta_w > theta_o: cos and sin of theta_w - theta_o
+            sw, so = math.sqrt(max(1.0 - cw * cw, 0.0)), math.sqrt(max(1.0 - co * co, 0.0))
+            cx, sx = cw * co + sw * so, sw * co - cw * so
+            if cx < cos_b:  # beyond theta_b too
+                c = cx * cos_b + sx * sin_b
+        if c < -1e-6:
             return 0.0
-        cos_e = max(math.cos(max(theta, 0.0)), COS_FLOOR)
+        cos_e = max(c, COS_FLOOR)
     cos_i = 1.0
     if surface and not inside:
         c = abs(_dot(wx, wy, wz, nx, ny, nz))  # cos(theta_i), theta_i - theta_b bounded
@@ -344,25 +376,25 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
 def select_light(light_kind, light_bounds, light_params, mode, px, py, pz, nx, ny, nz, u):
     """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
     to :func:`_importance`: (light, its probability, the total importance), light -1
-    (probability 0) where no light can contribute.  O(lights) per call."""
-    n_lights = len(light_kind)
+    (probability 0) where no light can contribute.  One pass over the lights, last to
+    first (a reservoir of one, the uniform ``u`` rescaled at each light: with two lights
+    ``u < p_0`` picks the first)."""
     total = 0.0
-    for j in range(n_lights):
-        total += _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz,
-                             nx, ny, nz)
-    if not (total > 0.0 and total < np.inf):
-        return -1, 0.0, 0.0
-    target = u * total
-    acc = 0.0
     chosen, w = -1, 0.0
-    for j in range(n_lights):
+    for j in range(len(light_kind) - 1, -1, -1):  # keep j with probability w_j / total so far
         wj = _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny,
                          nz)
-        if wj > 0.0:
+        if not wj > 0.0:
+            continue
+        total += wj
+        q = wj / total
+        if u < q:
             chosen, w = j, wj
-            acc += wj
-            if target < acc:
-                break
+            u = min(u / q, ONE_MINUS_EPS)
+        else:
+            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
+    if not (total > 0.0 and total < np.inf):
+        return -1, 0.0, 0.0
     return chosen, w / total, total
 
 
@@ -697,6 +729,10 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     has_media = sc[SC_MEDIA] != 0.0
     want_aov = sc[SC_AOV] != 0.0
     mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
+    n_every = 0  # delta lights sampled at every vertex
+    if mode >= EVERY_DELTA:
+        for j in range(len(tb.light_kind)):
+            n_every += 1 if _is_delta(tb.light_kind[j]) else 0
     n_const = 2 * len(tb.obj_flags)
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     # arrays out of the tuple once: each access costs numba two atomic reference counts
@@ -754,22 +790,28 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             if not depth < max_depth:
                 continue
             wox, woy, woz = -dx, -dy, -dz
-            j, sel, total = select_light(light_kind, light_bounds, light_params, mode, px, py,
-                                         pz, 0.0, 0.0, 0.0, u[i, 2])  # -1: none (pdf 0)
-            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
-                light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
-                env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
-            lpdf *= sel
-            ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
-                                                          lx, ly, lz)
-            if lpdf > 0.0:
-                w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
-                c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
-                if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                    ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
-                                        px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
-                                        c2, lface, q0, q1, q2, False, 0.0)
+            total, jd = 0.0, -1
+            for pick in range(1 + n_every):  # the selected light, then every delta light
+                if pick == 0:
+                    j, sel, total = select_light(light_kind, light_bounds, light_params, mode,
+                                                 px, py, pz, 0.0, 0.0, 0.0, u[i, 2])  # -1: none
+                else:
+                    jd = _next_delta(light_kind, jd)
+                    j, sel = jd, 1.0
+                (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
+                    light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
+                    env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
+                lpdf *= sel
+                ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
+                                                              lx, ly, lz)
+                if lpdf > 0.0:
+                    w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
+                    c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
+                    if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                        ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                                            px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
+                                            c2, lface, q0, q1, q2, False, 0.0)
             wix, wiy, wiz, pdf, w0, w1, w2, lobe = _phase_sample(
                 phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
             if lobe == 0:
@@ -883,9 +925,14 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         # next-event estimation
         prepared = False
         total = 0.0
-        if can_continue:
-            j, sel, total = select_light(light_kind, light_bounds, light_params, mode, px, py,
-                                         pz, nx, ny, nz, u[i, 2])
+        jd = -1
+        for pick in range(1 + n_every if can_continue else 0):  # selected, then every delta
+            if pick == 0:
+                j, sel, total = select_light(light_kind, light_bounds, light_params, mode, px,
+                                             py, pz, nx, ny, nz, u[i, 2])
+            else:
+                jd = _next_delta(light_kind, jd)
+                j, sel = jd, 1.0
             (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
                 light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                 light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,

@@ -173,6 +173,9 @@ class RenderSettings:
         How next-event estimation picks a light at a vertex
         (:func:`render.path.select_light`): by a bound on what each light can contribute
         there (distance, orientation, power), by power alone, or uniformly.
+    every_delta_light : bool
+        Sample each point, spot and directional light at every vertex (when a scene
+        has at most four), besides the light selected among the others.
     """
 
     width: int = 256
@@ -191,6 +194,7 @@ class RenderSettings:
     denoise: bool = False
     dice_invisible: bool = False
     light_selection: str = "contribution"
+    every_delta_light: bool = True
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -229,7 +233,7 @@ class RenderSettings:
         if self.light_selection not in ("contribution", "power", "uniform"):
             raise ValueError("light_selection must be one of 'contribution', 'power', "
                              f"'uniform', got {self.light_selection!r}")
-        for name in ("denoise", "dice_invisible"):
+        for name in ("denoise", "dice_invisible", "every_delta_light"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         return self
@@ -1036,6 +1040,7 @@ class _Parser:
             "denoise",
             "dice_invisible",
             "light_selection",
+            "every_delta_light",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -1068,6 +1073,7 @@ class _Parser:
             "denoise",
             "dice_invisible",
             "light_selection",
+            "every_delta_light",
         ):
             if key in t:
                 setattr(s, key, t[key])

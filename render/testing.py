@@ -563,10 +563,11 @@ def default_centers(wo: ArrayLike, transmitted: ArrayLike | None = None) -> dict
     return out
 
 
-def light_tables(lights, objects=(), selection: str = "uniform"):
+def light_tables(lights, objects=(), selection: str = "uniform", every_delta: bool = False):
     """The render kernels' tables (:class:`render.path.Tables`) of a scene with these
     lights and objects (a small square far behind the camera when there are none),
-    lights selected by ``selection`` (``[render] light_selection``)."""
+    lights selected by ``selection`` (``[render] light_selection``), delta lights each
+    at every vertex with ``every_delta`` (``[render] every_delta_light``)."""
     from displacement.surfaces import UnitSquare
     from render import material as M
     from render.camera import Camera
@@ -577,7 +578,8 @@ def light_tables(lights, objects=(), selection: str = "uniform"):
                                          make_transform(translate=(0.0, 0.0, 50.0)))]
     cam = Camera(position=(0, 0, 5), look_at=(0, 0, 0), width=4, height=4)
     scene = Scene(cam, objs, list(lights),
-                  RenderSettings(4, 4, spp=1, light_selection=selection))
+                  RenderSettings(4, 4, spp=1, light_selection=selection,
+                                 every_delta_light=every_delta))
     return Integrator(scene, scene.build()).tables
 
 

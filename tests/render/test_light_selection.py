@@ -117,6 +117,51 @@ def test_a_hundred_lights_nearest_first(rng):
     assert np.all(np.abs(freq - q) <= 5 * np.sqrt(q * (1 - q) / n) + 1e-12)
 
 
+def test_every_delta_light_leaves_the_others_to_the_selection():
+    tb = light_tables([PointLight((0.0, 0.0, 2.0), 5.0), DirectionalLight((0, -1, 0), 3.0),
+                       ConstantEnvironment(0.1)], [_quad(-1.0)], selection="contribution",
+                      every_delta=True)
+    p = np.array([[0.0, 0.0, 0.0], [3.0, 1.0, -2.0]])
+    pr = selection(tb, p, np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]))
+    assert np.all(pr[:, :2] == 0) and np.allclose(pr.sum(axis=1), 1.0)
+
+
 def test_setting_is_checked():
     with pytest.raises(ValueError, match="light_selection"):
         RenderSettings(light_selection="nearest").validate()
+
+
+def _render(selection, every_delta, seed):
+    from render import material as M
+    from render.camera import Camera
+    from render.integrator import Integrator
+    from render.scene import Scene
+
+    grey = M.material(surface=M.material_surface(M.df.diffuse_reflection_bsdf(tint=0.6)))
+    floor = SceneObject(UnitSquare(), grey, make_transform(translate=(-2.0, 0.0, 2.0),
+                                                           rotate=(-90.0, 0.0, 0.0),
+                                                           scale=(4.0, 4.0, 1.0)))
+    lamp = SceneObject(UnitSquare(), emissive_material((np.pi * 8.0,) * 3),
+                       make_transform(translate=(-0.6, 1.0, -0.2), rotate=(90.0, 0.0, 0.0),
+                                      scale=(0.3, 0.3, 1.0)))
+    lights = [PointLight((0.8, 0.7, 0.3), 0.5), DirectionalLight((0.3, -1.0, -0.4), 1.0),
+              ConstantEnvironment(0.2)]
+    cam = Camera(position=(0.0, 2.0, 3.0), look_at=(0.0, 0.0, 0.0), fov_y_deg=50.0, width=24,
+                 height=24)
+    scene = Scene(cam, [floor, lamp], lights,
+                  RenderSettings(24, 24, spp=48, light_selection=selection,
+                                 every_delta_light=every_delta))
+    return Integrator(scene, scene.build()).render(seed=seed, progress=False, threads=1).rgb()
+
+
+def test_every_selection_renders_the_same_image_in_expectation():
+    """Unbiased whatever the selection: MIS weights use the probability the selection
+    had at the vertex the path left.  Pixels are independent: the difference of two
+    images' means is within 5 standard errors of 0."""
+    base = _render("uniform", False, 1)
+    for k, (selection, every) in enumerate([("contribution", False), ("contribution", True),
+                                            ("power", True)]):
+        other = _render(selection, every, 2 + k)
+        diff = (other - base).mean(axis=2).ravel()
+        assert abs(diff.mean()) < 5 * diff.std() / np.sqrt(diff.size), (selection, every)
+        assert diff.std() > 0
