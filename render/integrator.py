@@ -7,8 +7,11 @@ Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` inte
 * per segment, every live lane through Embree (:func:`render.path.intersect`), then one
   compiled pass over the lanes (:func:`render.path.bounce`): emission found by a ray is
   weighted by multiple importance sampling (power heuristic) against next-event
-  estimation; next-event estimation picks one light uniformly (area, point, spot,
-  directional, environment map or sun and sky) and writes one shadow record per lane;
+  estimation; next-event estimation picks one light (area, point, spot, directional,
+  environment map or sun and sky) by what it can contribute at the vertex
+  (:func:`render.path.select_light`, ``[render] light_selection``), samples each delta
+  light at every vertex too (``every_delta_light``), and writes a shadow record per
+  light sampled;
   the bsdf's own sample continues the path (specular lobes too); Russian roulette from
   ``rr_depth``; ``max_depth`` counts path vertices after the camera, as Mitsuba does;
 * shadow records are traced and resolved (:func:`render.path.shadow_trace`,

@@ -9,7 +9,9 @@ arguments vary over the surface:
 2. :func:`bounce`: what happens on the segment and at its end, per lane: free-flight
    sampling in the lane's medium (spectral MIS over a hero channel), the environment on
    escape, and at a surface the cutout decision, emission (MIS against light
-   sampling), alpha and AOVs, next-event estimation (a shadow record per lane), the
+   sampling), alpha and AOVs, next-event estimation (a shadow record per lane and
+   light sampled: the one :func:`select_light` picks, and each delta light when they
+   are sampled at every vertex), the
    bsdf's sampled continuation, null crossings (index-matched or thin-walled straight
    transmission: no vertex), the stack of closed objects the path is inside (their
    media and IORs), and Russian roulette.  A scattering event in a medium is a vertex
