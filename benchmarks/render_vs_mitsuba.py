@@ -267,6 +267,10 @@ def main(argv=None) -> int:
     ap.add_argument("--ref-spp", type=int, default=4096, help="spp of the Mitsuba reference")
     ap.add_argument("--seconds", type=float, default=4.0, help="equal-time budget")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--light-selection", default="contribution",
+                    choices=["contribution", "power", "uniform"],
+                    help="ours: [render] light_selection (how next-event estimation picks "
+                         "a light)")
     ap.add_argument("--kinds", nargs="+", default=["diffuse", "glossy", "layered", "mixed"],
                     choices=["diffuse", "glossy", "layered", "mixed"])
     args = ap.parse_args(argv)
@@ -280,6 +284,7 @@ def main(argv=None) -> int:
     rows = []
     for kind in args.kinds:
         ours, md, cam = stage(kind, w, h)
+        ours.settings.light_selection = args.light_selection
         geometry = ours.build()
         integ = Integrator(ours, geometry)
         names = [obj.name for obj in ours.objects]
@@ -338,6 +343,7 @@ def main(argv=None) -> int:
         f"# {w}x{h}, max depth 8, {THREADS} threads; Msamples/s; Mitsuba reference "
         f"{args.ref_spp} spp on the same triangles (layered, mixed: ours against our own "
         f"{max(args.ref_spp // 4, 1)}-spp reference); equal time {args.seconds} s; "
+        f"light selection {args.light_selection}; "
         f"CPU SIMD: {simd_flags()}"
     )
     if args.markdown:

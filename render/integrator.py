@@ -7,8 +7,11 @@ Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` inte
 * per segment, every live lane through Embree (:func:`render.path.intersect`), then one
   compiled pass over the lanes (:func:`render.path.bounce`): emission found by a ray is
   weighted by multiple importance sampling (power heuristic) against next-event
-  estimation; next-event estimation picks one light uniformly (area, point, spot,
-  directional, environment map or sun and sky) and writes one shadow record per lane;
+  estimation; next-event estimation picks one light (area, point, spot, directional,
+  environment map or sun and sky) by what it can contribute at the vertex
+  (:func:`render.path.select_light`, ``[render] light_selection``), samples each delta
+  light at every vertex too (``every_delta_light``), and writes a shadow record per
+  light sampled;
   the bsdf's own sample continues the path (specular lobes too); Russian roulette from
   ``rr_depth``; ``max_depth`` counts path vertices after the camera, as Mitsuba does;
 * shadow records are traced and resolved (:func:`render.path.shadow_trace`,
@@ -171,6 +174,32 @@ def _varying(material) -> bool:
     return False
 
 
+def _luminance(rgb):
+    """Luminance of linear RGB (..., 3)."""
+    return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
+
+
+def _mean_radiance(env) -> float:
+    """An environment's radiance (luminance) averaged over the sphere: exact for a
+    constant or a lat-long map, by 4096 importance samples for the sun and sky."""
+    if isinstance(env, ConstantEnvironment):
+        return float(_luminance(env.radiance))
+    if isinstance(env, LatLongEnvironment):
+        rows = np.arange(env.h)
+        solid = (np.cos(np.pi * rows / env.h) - np.cos(np.pi * (rows + 1) / env.h)) / (2 * env.w)
+        return float((_luminance(env.image) * solid[:, None]).sum())
+    from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
+
+    params, u = env.kernel_params(), np.random.default_rng(0).random((4096, 2))
+    total = 0.0
+    for a, b in u:
+        d = sun_and_sky_sample(params, env._p, env._cdf, a, b)
+        pdf = sun_and_sky_pdf(params, env._p, d[0], d[1], d[2])
+        if pdf > 0.0:
+            total += float(_luminance(sun_and_sky_eval(params, d[0], d[1], d[2]))) / pdf
+    return total / (4096 * 4.0 * np.pi)
+
+
 class Integrator:
     """A path tracer for one built scene.
 
@@ -202,12 +231,15 @@ class Integrator:
                 lights.append(AreaLight(k, faces, corners, geometry.face_normal[faces],
                                         self._emission_fn(k)))
         self.lights = LightSet(lights)
+        n_delta = sum(light.delta for light in self.lights.lights)
+        #: delta lights sampled at every vertex besides the selected light (their shadow
+        #: records: up to 1 + n_delta per lane)
+        self.every_delta = bool(self.settings.every_delta_light and
+                                0 < n_delta <= kern.MAX_EVERY_DELTA)
+        self.shadow_rows = 1 + (n_delta if self.every_delta else 0)
         for light in self.lights.lights:
             if type(light) not in _LIGHT_KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
-        self.area_pdf = np.zeros(n_obj)
-        for k, light in self.lights.area_by_object.items():
-            self.area_pdf[k] = light.pdf_area * self.lights.select_pdf
         mats = [o.material for o in self.objects]
         self.cutout = np.array([_has_cutout(m) for m in mats], dtype=bool)
         # thin-walled materials with their own backface are shaded per side
@@ -368,7 +400,12 @@ class Integrator:
         else:
             sky_params, sky_p, sky_cdf = sky.kernel_params(), sky._p, sky._cdf
         scalars = np.zeros(kern.N_SCALARS)
-        scalars[kern.SC_SELECT] = self.lights.select_pdf
+        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[self.settings.light_selection]
+                                        + (kern.EVERY_DELTA if self.every_delta else 0))
+        env_index = [j for j, light in enumerate(lights) if light.infinite]
+        scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
+        object_light = np.full(n_obj, -1, dtype=np.int64)
+        object_light[light_object[light_object >= 0]] = np.flatnonzero(light_object >= 0)
         scalars[kern.SC_EPS] = self.eps
         scalars[kern.SC_MAX_DEPTH] = float(self.max_depth)
         scalars[kern.SC_RR_DEPTH] = float(self.settings.rr_depth)
@@ -389,13 +426,65 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit, emit_light,
-            np.asarray(self.area_pdf, dtype=np.float64), media, phase,
+            object_light, media, phase,
             kinds, light_object, light_params, light_first,
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
-            pdf_area, env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
+            pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
         return tables, params
+
+    def _light_bounds(self, kinds, emit_light, flags):
+        """(l, NLB) what each light can contribute (:func:`render.path._importance`):
+        bounding sphere, emission cone, intensity (area lights: mean radiance x area,
+        directional: irradiance, environments: pi x mean radiance; luminance) and power
+        (pbrt-v4's ``Light::Phi``: pi L A, 4 pi I, a spot's cone, pi r^2 E for a directional
+        light and pi L x pi r^2 for an environment, r the scene's bounding radius)."""
+        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
+        disk = np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
+        out = np.zeros((len(kinds), kern.NLB))
+        for j, light in enumerate(self.lights.lights):
+            kind = kinds[j]
+            if kind == kern.AREA:
+                c = light.corners.reshape(-1, 3)
+                a, b = c.min(axis=0), c.max(axis=0)
+                out[j, kern.LB_C:kern.LB_C + 3] = 0.5 * (a + b)
+                out[j, kern.LB_R] = 0.5 * float(np.linalg.norm(b - a))
+                area = 0.5 * np.linalg.norm(np.cross(light.corners[:, 1] - light.corners[:, 0],
+                                                     light.corners[:, 2] - light.corners[:, 0]),
+                                            axis=1)
+                k = light.object_id
+                axis = (area[:, None] * light.normals).sum(axis=0)
+                length = float(np.linalg.norm(axis))
+                cos_o = -1.0  # two-sided or varying emission: no cone
+                const = bool(flags[k] & kern.EMIT_CONST)
+                if const and length > 1e-9 * light.area:
+                    axis = axis / length
+                    cos_o = float(np.min(light.normals @ axis))
+                    out[j, kern.LB_AXIS:kern.LB_AXIS + 3] = axis
+                out[j, kern.LB_COS] = cos_o
+                if const:
+                    radiance = float(_luminance(emit_light[k]))
+                else:  # varying: its radiance at the triangles' centroids toward their normals
+                    third = np.full((len(light.faces), 3), 1.0 / 3.0)
+                    rad = _luminance(light.emission(light.faces, third, light.normals))
+                    radiance = float((rad * area).sum() / light.area)
+                out[j, kern.LB_I] = radiance * light.area
+                out[j, kern.LB_PHI] = np.pi * radiance * light.area
+            elif kind in (kern.POINT, kern.SPOT):
+                intensity = _luminance(light.intensity)
+                out[j, kern.LB_C:kern.LB_C + 3] = light.position
+                out[j, kern.LB_I] = intensity
+                cone = 2.0 if kind == kern.POINT else (
+                    (1.0 - light.cos_width) + 0.5 * (light.cos_width - light.cos_cutoff))
+                out[j, kern.LB_PHI] = 2.0 * np.pi * cone * intensity
+            elif kind == kern.DIRECTIONAL:
+                out[j, kern.LB_I] = _luminance(light.irradiance)
+                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
+            else:
+                out[j, kern.LB_I] = np.pi * _mean_radiance(light)
+                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
+        return out
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
@@ -589,7 +678,7 @@ class Integrator:
         # buffers reused from segment to segment (fresh ones would cost page faults):
         # lane state in and out, shadow records in and out, hits and random numbers
         nxt = (np.empty_like(lf), np.empty_like(li), np.empty_like(so), np.empty_like(sior))
-        shadow = self._shadow_buffers(n)
+        shadow = self._shadow_buffers(n * self.shadow_rows)
         face = np.empty(n, dtype=np.int64)
         b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
         u = np.empty((n, 9))

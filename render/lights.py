@@ -259,7 +259,8 @@ class AreaLight(Light):
 
 
 class LightSet:
-    """All the lights of a scene, one picked uniformly per next-event estimate.
+    """All the lights of a scene (next-event estimation picks among them with
+    :func:`render.path.select_light`).
 
     Parameters
     ----------
@@ -272,7 +273,8 @@ class LightSet:
         The environment seen by rays that leave the scene.
     area_by_object : dict[int, AreaLight]
     select_pdf : float
-        ``1 / len(lights)`` (0 without lights).
+        ``1 / len(lights)`` (0 without lights): a light's probability under
+        ``light_selection = "uniform"``.
     """
 
     def __init__(self, lights: list[Light]):

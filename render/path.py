@@ -9,7 +9,9 @@ arguments vary over the surface:
 2. :func:`bounce`: what happens on the segment and at its end, per lane: free-flight
    sampling in the lane's medium (spectral MIS over a hero channel), the environment on
    escape, and at a surface the cutout decision, emission (MIS against light
-   sampling), alpha and AOVs, next-event estimation (a shadow record per lane), the
+   sampling), alpha and AOVs, next-event estimation (a shadow record per lane and
+   light sampled: the one :func:`select_light` picks, and each delta light when they
+   are sampled at every vertex), the
    bsdf's sampled continuation, null crossings (index-matched or thin-walled straight
    transmission: no vertex), the stack of closed objects the path is inside (their
    media and IORs), and Russian roulette.  A scattering event in a medium is a vertex
@@ -61,7 +63,10 @@ __all__ = [
     "shadow_resolve",
     "outside_ior",
     "sample_light",
+    "select_light",
+    "selection_pdf",
     "sample_lights",
+    "selection",
     "escaped",
     "lane_count_columns",
 ]
@@ -77,7 +82,10 @@ SPECULAR_TRANSMISSION = int(Lobe.SPECULAR_TRANSMISSION)
 
 # lane columns: lf (float64)
 ORG, D, BETA, R, PREV_PDF, SEG, SHIFT = 0, 3, 6, 9, 12, 13, 14
-NF = 15
+# the previous vertex's position, normal (0 in a medium) and total light importance: the
+# light-selection probability of an emitter a bsdf-sampled path hits (MIS)
+PREV_P, PREV_N, PREV_SUM = 15, 18, 21
+NF = 22
 # li (int64)
 ID, DEPTH, DELTA, FIRST, CROSS, HERO, NSTK = 0, 1, 2, 3, 4, 5, 6
 NI = 7
@@ -95,6 +103,23 @@ CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST = 1, 2, 4, 8, 16
 
 #: ``light_kind``
 AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP, SUN_AND_SKY = 0, 1, 2, 3, 4, 5, 6
+#: ``[render] light_selection`` (``scalars[SC_SELECT]``)
+UNIFORM, POWER, CONTRIBUTION = 0, 1, 2
+SELECTIONS = {"uniform": UNIFORM, "power": POWER, "contribution": CONTRIBUTION}
+#: added to the mode: every delta light is sampled at every vertex, outside the selection
+EVERY_DELTA = 4
+#: at most this many delta lights are sampled at every vertex (more: selected)
+MAX_EVERY_DELTA = 4
+#: ``light_bounds`` columns: bounding-sphere centre and radius, emission cone axis and
+#: cos of its half-angle (area lights), intensity (the importance's numerator, see
+#: :func:`_importance`), power (pbrt's ``PowerLightSampler``)
+LB_C, LB_R, LB_AXIS, LB_COS, LB_I, LB_PHI = 0, 3, 4, 7, 8, 9
+NLB = 10
+#: the cosine at the receiver never counts less than this in a light's importance: the
+#: shading normal is not the geometric one, so "perpendicular" is no proof of "black"
+COS_FLOOR = 0.02
+#: an importance is clamped here so that a sum of many never overflows
+MAX_IMPORTANCE = 1e250
 
 #: Scene tables of the kernels (float64 unless noted).
 Tables = namedtuple(
@@ -118,7 +143,7 @@ Tables = namedtuple(
         "obj_medium",  # (k,) int64 medium of the inside, -1: none
         "emit_hit",  # (k, 3) radiance seen on the front of a constant diffuse emitter
         "emit_light",  # (k, 3) radiance of its light samples
-        "area_pdf",  # (k,) light-selection probability / area
+        "object_light",  # (k,) int64 the area light of each object, -1: none
         "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
         "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
         "light_kind",  # (l,) int64
@@ -129,6 +154,7 @@ Tables = namedtuple(
         "light_cdf",  # (t,) area cdf within each light
         "light_corners",  # (t, 3, 3) their corners
         "light_pdf_area",  # (l,) 1 / area
+        "light_bounds",  # (l, NLB) what a light can contribute (LB_* columns)
         "env",  # (3,) constant environment radiance
         "env_image",  # (h, w, 3) environment map radiance
         "env_p",  # (h * w,) its texels' probabilities
@@ -142,7 +168,8 @@ Tables = namedtuple(
 SC_SELECT, SC_EPS, SC_MAX_DEPTH, SC_RR_DEPTH, SC_ENV, SC_ROT_C, SC_ROT_S = 0, 1, 2, 3, 4, 5, 6
 SC_MEDIA, SC_AOV, SC_CAM = 7, 8, 9  # media present, AOVs asked for, camera position (9..11)
 SC_FWD = 12  # camera forward (12..14)
-N_SCALARS = 15
+SC_ENV_LIGHT = 15  # index of the environment light, -1: none
+N_SCALARS = 16
 
 
 def lane_count_columns():
@@ -231,20 +258,157 @@ def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
 
 @njit
 def _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz):
-    """Radiance along an escaping direction and the pdf of sampling it (selection
-    included): (pdf, r, g, b)."""
+    """Radiance along an escaping direction and the pdf of sampling it once the
+    environment is selected: (pdf, r, g, b)."""
     kind = sc[SC_ENV]
-    select = sc[SC_SELECT]
     if kind == ENVIRONMENT:
-        return 0.25 / np.pi * select, env[0], env[1], env[2]
+        return 0.25 / np.pi, env[0], env[1], env[2]
     if kind == ENVIRONMENT_MAP:
         pe, e0, e1, e2 = _environment_map(env_image, env_p, sc[SC_ROT_C], sc[SC_ROT_S],
                                           dx, dy, dz)
-        return pe * select, e0, e1, e2
+        return pe, e0, e1, e2
     if kind == SUN_AND_SKY:
         e0, e1, e2 = sun_and_sky_eval(sky, dx, dy, dz)
-        return sun_and_sky_pdf(sky, sky_p, dx, dy, dz) * select, e0, e1, e2
+        return sun_and_sky_pdf(sky, sky_p, dx, dy, dz), e0, e1, e2
     return 0.0, 0.0, 0.0, 0.0
+
+
+@njit(inline="always")
+def _is_delta(kind):
+    return kind == POINT or kind == SPOT or kind == DIRECTIONAL
+
+
+@njit(inline="always")
+def _next_delta(light_kind, j):
+    """The first delta light after light ``j`` (-1: none)."""
+    for k in range(j + 1, len(light_kind)):
+        if _is_delta(light_kind[k]):
+            return k
+    return -1
+
+
+@njit(inline="always")
+def _spot_falloff(lp, j, c):
+    """Spot ``j``'s falloff at cosine ``c`` from its axis: smoothstep between the cosines
+    of the cutoff and the beam width, 0 outside the cutoff."""
+    span = lp[j, 10] - lp[j, 9]
+    if span <= 0.0:
+        return 1.0 if c >= lp[j, 9] else 0.0
+    t = min(max((c - lp[j, 9]) / span, 0.0), 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+@njit
+def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny, nz):
+    """How much light ``j`` may contribute at p with normal n (n = 0: a point in a
+    medium), up to a common factor: the weight by which :func:`select_light` picks it.
+
+    ``mode`` UNIFORM: 1; POWER: the light's power (pbrt-v4's ``PowerLightSampler``);
+    CONTRIBUTION: a bound on the irradiance at p (pbrt-v4's ``LightBounds::Importance``
+    for one light): intensity / d^2 (d from the light's bounding sphere, at least its
+    radius) times the cosine at the emitter bounded over its emission cone and bounding
+    sphere (0 only where p is behind every triangle of a one-sided emitter, or outside a
+    spot's cutoff: where the light gives nothing) times the bounded cosine at the
+    receiver (at least COS_FLOOR).  Directional lights: irradiance times that cosine;
+    environments: pi times their mean radiance (4 pi in a medium).
+
+    ``mode + EVERY_DELTA``: the same, delta lights 0 (each is sampled at every vertex,
+    outside the selection)."""
+    lb = light_bounds
+    kind = light_kind[j]
+    if mode >= EVERY_DELTA:
+        if _is_delta(kind):
+            return 0.0
+        mode -= EVERY_DELTA
+    if mode == UNIFORM:
+        return 1.0
+    if mode == POWER:
+        return min(lb[j, LB_PHI], MAX_IMPORTANCE)
+    intensity = lb[j, LB_I]
+    if not intensity > 0.0:
+        return 0.0
+    surface = nx != 0.0 or ny != 0.0 or nz != 0.0
+    if kind == ENVIRONMENT or kind == ENVIRONMENT_MAP or kind == SUN_AND_SKY:
+        return intensity if surface else 4.0 * intensity
+    if kind == DIRECTIONAL:
+        cos_i = abs(_dot(nx, ny, nz, light_params[j, 3], light_params[j, 4],
+                         light_params[j, 5])) if surface else 1.0
+        return intensity * max(cos_i, COS_FLOOR)
+    # from the light's bounding sphere to p
+    vx, vy, vz = px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2]
+    r = lb[j, LB_R]
+    d2 = vx * vx + vy * vy + vz * vz
+    wx, wy, wz, ok = _unitize(vx, vy, vz)
+    inside = d2 <= r * r or not ok
+    # sin and cos of the half-angle the bounding sphere subtends at p
+    sin_b = 1.0 if inside else min(r / math.sqrt(d2), 1.0)
+    cos_b = math.sqrt(max(1.0 - sin_b * sin_b, 0.0))
+    cos_e = 1.0
+    if kind == SPOT:  # a point: its falloff exactly
+        cos_e = _spot_falloff(light_params, j, _dot(wx, wy, wz, light_params[j, 3],
+                                                    light_params[j, 4], light_params[j, 5]))
+        if not cos_e > 0.0:
+            return 0.0
+    elif kind == AREA and not inside and lb[j, LB_COS] > -1.0:
+        # cos theta', theta' = max(0, theta_w - theta_o - theta_b): 0 (p behind) below
+        # -1e-6, a margin for rounding
+        cw = min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1], lb[j, LB_AXIS + 2]),
+                     -1.0), 1.0)
+        co = lb[j, LB_COS]
+        c = 1.0
+        if cw < co:  # theta_w > theta_o: cos and sin of theta_w - theta_o
+            sw, so = math.sqrt(max(1.0 - cw * cw, 0.0)), math.sqrt(max(1.0 - co * co, 0.0))
+            cx, sx = cw * co + sw * so, sw * co - cw * so
+            if cx < cos_b:  # beyond theta_b too
+                c = cx * cos_b + sx * sin_b
+        if c < -1e-6:
+            return 0.0
+        cos_e = max(c, COS_FLOOR)
+    cos_i = 1.0
+    if surface and not inside:
+        c = abs(_dot(wx, wy, wz, nx, ny, nz))  # cos(theta_i), theta_i - theta_b bounded
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        cos_i = 1.0 if c >= cos_b else c * cos_b + s * sin_b
+        cos_i = max(cos_i, COS_FLOOR)
+    d2 = max(d2, r * r, 1e-300)
+    return min(intensity * cos_e * cos_i / d2, MAX_IMPORTANCE)
+
+
+@njit
+def select_light(light_kind, light_bounds, light_params, mode, px, py, pz, nx, ny, nz, u):
+    """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
+    to :func:`_importance`: (light, its probability, the total importance), light -1
+    (probability 0) where no light can contribute.  One pass over the lights, last to
+    first (a reservoir of one, the uniform ``u`` rescaled at each light: with two lights
+    ``u < p_0`` picks the first)."""
+    total = 0.0
+    chosen, w = -1, 0.0
+    for j in range(len(light_kind) - 1, -1, -1):  # keep j with probability w_j / total so far
+        wj = _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny,
+                         nz)
+        if not wj > 0.0:
+            continue
+        total += wj
+        q = wj / total
+        if u < q:
+            chosen, w = j, wj
+            u = min(u / q, ONE_MINUS_EPS)
+        else:
+            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
+    if not (total > 0.0 and total < np.inf):
+        return -1, 0.0, 0.0
+    return chosen, w / total, total
+
+
+@njit
+def selection_pdf(light_kind, light_bounds, light_params, mode, j, total, px, py, pz, nx, ny,
+                  nz):
+    """The probability that :func:`select_light` at p (normal n), whose importances sum
+    to ``total``, picks light ``j`` (0 for ``j < 0``)."""
+    if j < 0 or not total > 0.0:
+        return 0.0
+    return _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny,
+                       nz) / total
 
 
 @njit
@@ -253,14 +417,14 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
                   env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
                   u2):
     """Light ``j`` sampled from p: (wi xyz, distance, radiance rgb, pdf, delta, face,
-    b0, b1, b2).  ``pdf`` includes the selection probability (delta lights: it alone);
+    b0, b1, b2).  ``pdf`` is the density once ``j`` is selected (delta lights: 1; the
+    caller multiplies by the selection probability, :func:`select_light`);
     ``face >= 0`` marks an area light whose radiance varies over it (radiance returned
     as 1: the integrator evaluates it at ``face`` and the barycentrics ``b``).
 
     Takes the scene's arrays one by one (:data:`Tables`): an array taken out of a tuple
     costs numba two atomic reference counts, which per lane cost more than the work."""
-    select = scalars[SC_SELECT]
-    if j < 0:  # a scene without lights
+    if j < 0:  # a scene without lights, or none that can contribute
         return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
     kind = light_kind[j]
     if kind == ENVIRONMENT:  # uniform sphere
@@ -269,7 +433,7 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
         phi = 2.0 * np.pi * u2
         e = env
         return (r * math.cos(phi), r * math.sin(phi), z, INFINITE_DISTANCE, e[0], e[1], e[2],
-                0.25 / np.pi * select, False, -1, 0.0, 0.0, 0.0)
+                0.25 / np.pi, False, -1, 0.0, 0.0, 0.0)
     if kind == ENVIRONMENT_MAP:  # a texel by its cdf
         image, cdf = env_image, env_cdf
         rot_c, rot_s = scalars[SC_ROT_C], scalars[SC_ROT_S]
@@ -287,18 +451,18 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
         pdf, e0, e1, e2 = _environment_map(image, env_p, rot_c, rot_s, wx, wy, wz)
         if not pdf > 0.0:
             e0 = e1 = e2 = 0.0
-        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
+        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf, False, -1, 0.0, 0.0, 0.0
     if kind == SUN_AND_SKY:
         wx, wy, wz = sun_and_sky_sample(sky, sky_p, sky_cdf, u1, u2)
         pdf = sun_and_sky_pdf(sky, sky_p, wx, wy, wz)
         e0 = e1 = e2 = 0.0
         if pdf > 0.0:
             e0, e1, e2 = sun_and_sky_eval(sky, wx, wy, wz)
-        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf * select, False, -1, 0.0, 0.0, 0.0
+        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf, False, -1, 0.0, 0.0, 0.0
     lp = light_params
     if kind == DIRECTIONAL:
         return (-lp[j, 3], -lp[j, 4], -lp[j, 5], INFINITE_DISTANCE, lp[j, 6], lp[j, 7],
-                lp[j, 8], select, True, -1, 0.0, 0.0, 0.0)
+                lp[j, 8], 1.0, True, -1, 0.0, 0.0, 0.0)
     if kind != AREA:  # point, or spot with a smoothstep falloff in the cosine
         dx, dy, dz = lp[j, 0] - px, lp[j, 1] - py, lp[j, 2] - pz
         dist = math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -307,15 +471,9 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
             return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, True, -1, 0.0, 0.0, 0.0
         scale = 1.0 / (dist * dist)
         if kind == SPOT:
-            c = _dot(-wx, -wy, -wz, lp[j, 3], lp[j, 4], lp[j, 5])
-            span = lp[j, 10] - lp[j, 9]
-            if span <= 0.0:
-                falloff = 1.0 if c >= lp[j, 9] else 0.0
-            else:
-                t = min(max((c - lp[j, 9]) / span, 0.0), 1.0)
-                falloff = t * t * (3.0 - 2.0 * t)
-            scale = scale * falloff
-        return (wx, wy, wz, dist, scale * lp[j, 6], scale * lp[j, 7], scale * lp[j, 8], select,
+            scale = scale * _spot_falloff(lp, j, _dot(-wx, -wy, -wz, lp[j, 3], lp[j, 4],
+                                                      lp[j, 5]))
+        return (wx, wy, wz, dist, scale * lp[j, 6], scale * lp[j, 7], scale * lp[j, 8], 1.0,
                 True, -1, 0.0, 0.0, 0.0)
     # an emissive object: a triangle by area, a uniform point on it
     a, b = light_first[j], light_first[j + 1]
@@ -341,7 +499,7 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
     cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
     if not (ok and dist > 0.0 and cos_l > 1e-12):
         return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
-    pdf = dist * dist / cos_l * light_pdf_area[j] * select
+    pdf = dist * dist / cos_l * light_pdf_area[j]
     obj = light_object[j]
     if not (obj_flags[obj] & EMIT_CONST):
         return wx, wy, wz, dist, 1.0, 1.0, 1.0, pdf, False, f, b0, b1, b2
@@ -353,31 +511,52 @@ def sample_light(light_kind, light_params, light_first, light_cdf, light_corners
 
 @njit(allocates=True)
 def sample_lights(tb, p, u):
-    """:func:`sample_light` for points ``p`` (n, 3) with uniforms ``u`` (n, 3): the
-    light chosen by ``u[:, 0]`` as :func:`bounce` chooses it, sampled with ``u[:, 1:]``.
+    """:func:`sample_light` for points ``p`` (n, 3) in a medium (no normal) with
+    uniforms ``u`` (n, 3): the light chosen by ``u[:, 0]`` as :func:`bounce` chooses it,
+    sampled with ``u[:, 1:]``.
 
     Returns ``wi`` (n, 3), distance (n,), radiance (n, 3), pdf (n,) (selection
     included), delta (n,) bool and the varying-emission face (n,) (-1: none)."""
     n = len(p)
     wi, dist, li, pdf = np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n)
     delta, face = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.int64)
-    n_lights = len(tb.light_kind)
+    mode = int(tb.scalars[SC_SELECT])
     for i in range(n):
-        j = min(int(u[i, 0] * n_lights), n_lights - 1)
+        j, sel, _ = select_light(tb.light_kind, tb.light_bounds, tb.light_params, mode,
+                                 p[i, 0], p[i, 1], p[i, 2], 0.0, 0.0, 0.0, u[i, 0])
         (wi[i, 0], wi[i, 1], wi[i, 2], dist[i], li[i, 0], li[i, 1], li[i, 2], pdf[i], delta[i],
          face[i], _, _, _) = sample_light(
             tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
             tb.light_faces, tb.light_pdf_area, tb.light_object, tb.obj_flags, tb.emit_light,
             tb.face_normal, tb.env, tb.env_image, tb.env_p, tb.env_cdf, tb.sky, tb.sky_p,
             tb.sky_cdf, tb.scalars, j, p[i, 0], p[i, 1], p[i, 2], u[i, 1], u[i, 2])
+        pdf[i] *= sel
     return wi, dist, li, pdf, delta, face
+
+
+@njit(allocates=True)
+def selection(tb, p, nrm):
+    """(n, lights) the probability that next-event estimation at points ``p`` (n, 3)
+    with normals ``nrm`` (n, 3; 0: in a medium) picks each light (:func:`select_light`)."""
+    n, n_lights = len(p), len(tb.light_kind)
+    out = np.zeros((n, n_lights))
+    mode = int(tb.scalars[SC_SELECT])
+    for i in range(n):
+        _, _, total = select_light(tb.light_kind, tb.light_bounds, tb.light_params, mode,
+                                   p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1], nrm[i, 2],
+                                   0.5)
+        for j in range(n_lights):
+            out[i, j] = selection_pdf(tb.light_kind, tb.light_bounds, tb.light_params, mode, j,
+                                      total, p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1],
+                                      nrm[i, 2])
+    return out
 
 
 @njit(allocates=True)
 def escaped(tb, d):
     """What a path sees along unit directions ``d`` (n, 3) that leave the scene: the
-    pdf with which light sampling picks them (selection included) (n,) and the
-    radiance (n, 3)."""
+    pdf with which the environment, once selected, samples them (n,) and the radiance
+    (n, 3)."""
     n = len(d)
     pdf, li = np.empty(n), np.empty((n, 3))
     sc, env, env_image, env_p, sky, sky_p = (tb.scalars, tb.env, tb.env_image, tb.env_p, tb.sky,
@@ -411,6 +590,15 @@ def _copy_lane(a, b, c, d, i, na, nb, nc, nd, j):
     _copy_row(b, i, nb, j)
     _copy_row(c, i, nc, j)
     _copy_row(d, i, nd, j)
+
+
+@njit(inline="always")
+def _set_prev(lf, i, px, py, pz, nx, ny, nz, total):
+    """Lane ``i`` leaves a vertex at p (normal n, 0 in a medium) whose light importances
+    sum to ``total``."""
+    lf[i, PREV_P], lf[i, PREV_P + 1], lf[i, PREV_P + 2] = px, py, pz
+    lf[i, PREV_N], lf[i, PREV_N + 1], lf[i, PREV_N + 2] = nx, ny, nz
+    lf[i, PREV_SUM] = total
 
 
 @njit(inline="always")
@@ -557,11 +745,16 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
     has_media = sc[SC_MEDIA] != 0.0
     want_aov = sc[SC_AOV] != 0.0
-    n_lights = len(tb.light_kind)
+    mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
+    n_every = 0  # delta lights sampled at every vertex
+    if mode >= EVERY_DELTA:
+        for j in range(len(tb.light_kind)):
+            n_every += 1 if _is_delta(tb.light_kind[j]) else 0
     n_const = 2 * len(tb.obj_flags)
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     # arrays out of the tuple once: each access costs numba two atomic reference counts
-    area_pdf, emit_hit, face_normal = tb.area_pdf, tb.emit_hit, tb.face_normal
+    object_light, emit_hit, face_normal = tb.object_light, tb.emit_hit, tb.face_normal
+    light_bounds = tb.light_bounds
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
     medium, phase = tb.medium, tb.phase
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
@@ -583,6 +776,9 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         r0, r1, r2 = lf[i, R], lf[i, R + 1], lf[i, R + 2]
         prev_pdf = lf[i, PREV_PDF]
         prev_delta = li[i, DELTA] != 0
+        vx, vy, vz = lf[i, PREV_P], lf[i, PREV_P + 1], lf[i, PREV_P + 2]
+        vnx, vny, vnz = lf[i, PREV_N], lf[i, PREV_N + 1], lf[i, PREV_N + 2]
+        prev_sum = lf[i, PREV_SUM]
         f = face[i]
         t_hit = ht[i] if f >= 0 else np.inf
         # ---- the medium of the segment: attenuate, or scatter inside it
@@ -611,20 +807,28 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             if not depth < max_depth:
                 continue
             wox, woy, woz = -dx, -dy, -dz
-            j = min(int(u[i, 2] * n_lights), n_lights - 1)  # -1: no lights (pdf 0 below)
-            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
-                light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
-                env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
-            ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
-                                                          lx, ly, lz)
-            if lpdf > 0.0:
-                w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
-                c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
-                if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                    ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
-                                        px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
-                                        c2, lface, q0, q1, q2, False, 0.0)
+            total, jd = 0.0, -1
+            for pick in range(1 + n_every):  # the selected light, then every delta light
+                if pick == 0:
+                    j, sel, total = select_light(light_kind, light_bounds, light_params, mode,
+                                                 px, py, pz, 0.0, 0.0, 0.0, u[i, 2])  # -1: none
+                else:
+                    jd = _next_delta(light_kind, jd)
+                    j, sel = jd, 1.0
+                (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
+                    light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
+                    env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
+                lpdf *= sel
+                ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
+                                                              lx, ly, lz)
+                if lpdf > 0.0:
+                    w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
+                    c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
+                    if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
+                        ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
+                                            px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
+                                            c2, lface, q0, q1, q2, False, 0.0)
             wix, wiy, wiz, pdf, w0, w1, w2, lobe = _phase_sample(
                 phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
             if lobe == 0:
@@ -642,6 +846,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
             nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
             nlf[nn, PREV_PDF], nlf[nn, SEG], nlf[nn, SHIFT] = pdf, 0.0, 0.0
+            _set_prev(nlf, nn, px, py, pz, 0.0, 0.0, 0.0, total)
             nli[nn, DEPTH], nli[nn, DELTA], nli[nn, CROSS] = depth + 1, 0, 0
             nn += 1
             continue
@@ -649,6 +854,9 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             # ---- escaped: the environment, weighted against light sampling
             pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
             if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+                if not prev_delta:
+                    pe *= selection_pdf(light_kind, light_bounds, light_params, mode, env_light,
+                                        prev_sum, vx, vy, vz, vnx, vny, vnz)
                 w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
                 L[lane, 0] += b0 * e0 * w
                 L[lane, 1] += b1 * e1 * w
@@ -697,9 +905,14 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         if flags & EMIT_CONST and front and woz > 1e-10:
             e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
         if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+            w = 1.0 / mis
+            jl = object_light[k]
             cos_l = abs(g_wo)
-            pl = area_pdf[k] * dist_v * dist_v / cos_l if cos_l > 0.0 else 0.0
-            w = (1.0 if prev_delta else _power(prev_pdf, pl)) / mis
+            if not prev_delta and jl >= 0 and cos_l > 0.0:
+                pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(
+                    light_kind, light_bounds, light_params, mode, jl, prev_sum, vx, vy, vz,
+                    vnx, vny, vnz)
+                w = _power(prev_pdf, pl) / mis
             L[lane, 0] += b0 * e0 * w
             L[lane, 1] += b1 * e1 * w
             L[lane, 2] += b2 * e2 * w
@@ -728,12 +941,20 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         encloses = (flags & ENCLOSES) != 0
         # next-event estimation
         prepared = False
-        if can_continue:
-            j = min(int(u[i, 2] * n_lights), n_lights - 1)
+        total = 0.0
+        jd = -1
+        for pick in range(1 + n_every if can_continue else 0):  # selected, then every delta
+            if pick == 0:
+                j, sel, total = select_light(light_kind, light_bounds, light_params, mode, px,
+                                             py, pz, nx, ny, nz, u[i, 2])
+            else:
+                jd = _next_delta(light_kind, jd)
+                j, sel = jd, 1.0
             (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
                 light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                 light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
                 env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
+            lpdf *= sel
             wlx = _dot(lx, ly, lz, sx, sy, sz)
             wly = _dot(lx, ly, lz, qx, qy, qz)
             wlz = _dot(lx, ly, lz, nx, ny, nz)
@@ -801,6 +1022,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             nli[nn, CROSS] = crossings + 1
         else:
             nlf[nn, PREV_PDF], nlf[nn, SEG] = pdf, 0.0
+            _set_prev(nlf, nn, px, py, pz, nx, ny, nz, total)
             nli[nn, DEPTH], nli[nn, CROSS] = depth + 1, 0
             nli[nn, DELTA] = 1 if (lobe & SPECULAR) != 0 else 0
         nn += 1

@@ -169,6 +169,13 @@ class RenderSettings:
     dice_invisible : bool
         Dice every displaced object.  By default (False) a displacement the camera
         cannot see is not diced (:meth:`Scene.build`).
+    light_selection : {"contribution", "power", "uniform"}
+        How next-event estimation picks a light at a vertex
+        (:func:`render.path.select_light`): by a bound on what each light can contribute
+        there (distance, orientation, power), by power alone, or uniformly.
+    every_delta_light : bool
+        Sample each point, spot and directional light at every vertex (when a scene
+        has at most four), besides the light selected among the others.
     """
 
     width: int = 256
@@ -186,6 +193,8 @@ class RenderSettings:
     texture_filter: str = "bilinear"
     denoise: bool = False
     dice_invisible: bool = False
+    light_selection: str = "contribution"
+    every_delta_light: bool = True
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -221,7 +230,10 @@ class RenderSettings:
         if self.texture_filter not in FILTERS:
             raise ValueError(f"texture_filter must be one of {', '.join(map(repr, FILTERS))}, "
                              f"got {self.texture_filter!r}")
-        for name in ("denoise", "dice_invisible"):
+        if self.light_selection not in ("contribution", "power", "uniform"):
+            raise ValueError("light_selection must be one of 'contribution', 'power', "
+                             f"'uniform', got {self.light_selection!r}")
+        for name in ("denoise", "dice_invisible", "every_delta_light"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         return self
@@ -1002,6 +1014,8 @@ class _Parser:
             "texture_filter",
             "denoise",
             "dice_invisible",
+            "light_selection",
+            "every_delta_light",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -1033,6 +1047,8 @@ class _Parser:
             "texture_filter",
             "denoise",
             "dice_invisible",
+            "light_selection",
+            "every_delta_light",
         ):
             if key in t:
                 setattr(s, key, t[key])

@@ -563,9 +563,11 @@ def default_centers(wo: ArrayLike, transmitted: ArrayLike | None = None) -> dict
     return out
 
 
-def light_tables(lights, objects=()):
+def light_tables(lights, objects=(), selection: str = "uniform", every_delta: bool = False):
     """The render kernels' tables (:class:`render.path.Tables`) of a scene with these
-    lights and objects (a small square far behind the camera when there are none)."""
+    lights and objects (a small square far behind the camera when there are none),
+    lights selected by ``selection`` (``[render] light_selection``), delta lights each
+    at every vertex with ``every_delta`` (``[render] every_delta_light``)."""
     from displacement.surfaces import UnitSquare
     from render import material as M
     from render.camera import Camera
@@ -575,7 +577,9 @@ def light_tables(lights, objects=()):
     objs = list(objects) or [SceneObject(UnitSquare(), M.material(),
                                          make_transform(translate=(0.0, 0.0, 50.0)))]
     cam = Camera(position=(0, 0, 5), look_at=(0, 0, 0), width=4, height=4)
-    scene = Scene(cam, objs, list(lights), RenderSettings(4, 4, spp=1))
+    scene = Scene(cam, objs, list(lights),
+                  RenderSettings(4, 4, spp=1, light_selection=selection,
+                                 every_delta_light=every_delta))
     return Integrator(scene, scene.build()).tables
 
 
@@ -583,10 +587,10 @@ def light_samples(lights, p: ArrayLike, u: ArrayLike, objects=()):
     """Samples of the first light of a scene from points ``p`` (n, 3) with uniforms
     ``u`` (n, 2), by :func:`render.path.sample_light`: ``(wi, distance, radiance, pdf,
     delta)``, the pdf divided by the light's selection probability."""
-    from render.path import sample_lights
+    from render.path import sample_lights, selection
 
     tables = light_tables(lights, objects)
     p = np.asarray(p, dtype=np.float64)
     u = np.column_stack([np.zeros(len(p)), np.asarray(u, dtype=np.float64)])
     wi, dist, li, pdf, delta, _ = sample_lights(tables, p, u)
-    return wi, dist, li, pdf / tables.scalars[0], delta
+    return wi, dist, li, pdf / selection(tables, p, np.zeros_like(p))[:, 0], delta

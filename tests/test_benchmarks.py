@@ -21,6 +21,7 @@ BENCHMARKS = {
     "cluster_speed.py": ["--quick"],
     "invisible_displacement.py": ["--quick"],
     "displaced_vs_mitsuba.py": ["--quick"],
+    "light_selection.py": ["--quick"],
 }
 
 

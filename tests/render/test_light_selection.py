@@ -1,0 +1,167 @@
+"""Light selection for next-event estimation (render.path.select_light): probabilities
+that sum to 1 at any point, 0 only where a light gives nothing, defined at the extremes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from displacement.surfaces import UnitSquare
+from render.lights import ConstantEnvironment, DirectionalLight, PointLight, SpotLight
+from render.path import sample_lights, selection
+from render.scene import RenderSettings, SceneObject, emissive_material, make_transform
+from render.testing import light_tables
+
+MODES = ("contribution", "power", "uniform")
+
+
+def _quad(x, z=0.0, size=0.2, radiance=1.0):
+    """A one-sided emissive square in the plane ``z`` facing +z, corner at (x, 0)."""
+    return SceneObject(UnitSquare(), emissive_material((np.pi * radiance,) * 3),
+                       make_transform(translate=(x, 0.0, z), scale=(size, size, 1.0)))
+
+
+def _mixed(mode):
+    lights = [PointLight((0.0, 0.0, 2.0), 5.0),
+              SpotLight((1.0, 1.0, 3.0), (0.0, 0.0, -1.0), 20.0, cutoff_angle=30.0),
+              DirectionalLight((0.3, -1.0, 0.2), 3.0), ConstantEnvironment(0.1)]
+    return light_tables(lights, [_quad(-1.0), _quad(1.5, z=1.0)], selection=mode)
+
+
+_TABLES = {mode: _mixed(mode) for mode in MODES}
+coord = st.floats(-1e6, 1e6, allow_nan=False)
+unit = st.floats(-1.0, 1.0, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(p=st.tuples(coord, coord, coord), n=st.tuples(unit, unit, unit),
+       mode=st.sampled_from(MODES))
+def test_probabilities_sum_to_one_anywhere(p, n, mode):
+    pr = selection(_TABLES[mode], np.array([p]), np.array([n]))
+    assert np.all(np.isfinite(pr)) and np.all(pr >= 0)
+    assert pr.sum() == pytest.approx(1.0, rel=1e-12)  # the environment always can
+
+
+def test_uniform_and_power_ignore_the_point():
+    p = np.array([[0.0, 0.0, 0.0], [5.0, -3.0, 100.0]])
+    assert np.allclose(selection(_TABLES["uniform"], p, np.zeros_like(p)), 1 / 6)
+    pw = selection(_TABLES["power"], p, np.zeros_like(p))
+    assert np.allclose(pw[0], pw[1])
+    # pbrt's powers: point 4 pi I, directional pi r^2 E, environment pi L pi r^2
+    assert pw[0, 2] / pw[0, 3] == pytest.approx(3.0 / (np.pi * 0.1))
+
+
+def test_zero_only_behind_a_one_sided_emitter_where_it_gives_nothing(rng):
+    objs = [_quad(0.0, size=1.0)]
+    contribution = light_tables([], objs, selection="contribution")
+    uniform = light_tables([], objs)  # samples the square from any point
+    n = 400
+    p = np.column_stack([rng.uniform(-3, 4, n), rng.uniform(-3, 4, n),
+                         np.concatenate([rng.uniform(-3, -1e-3, n // 2),
+                                         rng.uniform(1e-3, 3, n // 2)])])
+    pr = selection(contribution, p, np.zeros_like(p))[:, 0]
+    assert np.all(pr[p[:, 2] > 0] == 1)
+    # right behind it: 0 (near its plane the bounding sphere keeps it possible)
+    below = (p[:, 2] < -1) & (p[:, 0] > 0) & (p[:, 0] < 1) & (p[:, 1] > 0) & (p[:, 1] < 1)
+    assert below.any() and np.all(pr[below] == 0)
+    # wherever it is 0, the square really gives nothing: 64 samples from each point
+    q = np.repeat(p[pr == 0], 64, axis=0)
+    u = np.column_stack([np.zeros(len(q)), rng.random((len(q), 2))])
+    _, _, li, _, _, _ = sample_lights(uniform, q, u)
+    assert np.all(li == 0)
+    # a spot outside its cutoff: 0, inside: 1, the sampled radiance agrees
+    spot = [SpotLight((0.0, 0.0, 0.0), (0.0, 0.0, -1.0), 1.0, cutoff_angle=30.0)]
+    tb = light_tables(spot, selection="contribution")
+    d = np.radians([10.0, 29.0, 31.0, 90.0, 170.0])
+    p = np.column_stack([np.sin(d), np.zeros(5), -np.cos(d)])
+    pr = selection(tb, p, np.zeros_like(p))[:, 0]
+    _, _, li, _, _, _ = sample_lights(light_tables(spot), p, np.zeros((5, 3)))
+    assert pr.tolist() == [1.0, 1.0, 0.0, 0.0, 0.0] and np.all((li[:, 0] > 0) == (pr > 0))
+
+
+def test_extremes_of_distance_power_and_count():
+    lights = [PointLight((1e-6, 0.0, 0.0), 1.0), PointLight((1e6, 0.0, 0.0), 1.0),
+              PointLight((0.0, 1.0, 0.0), 0.0)]
+    tb = light_tables(lights, selection="contribution")
+    pr = selection(tb, np.zeros((1, 3)), np.array([[0.0, 1.0, 0.0]]))[0]
+    assert np.all(np.isfinite(pr)) and pr.sum() == pytest.approx(1.0)
+    assert pr[0] >= 1 - 1e-12 and pr[2] == 0  # the zero-power light is never picked
+    assert pr[1] > 0  # 1e-24 of the near one, but not lost
+    one = light_tables([PointLight((1e6, 1e6, 1e6), 1e-30)], selection="contribution")
+    assert selection(one, np.zeros((1, 3)), np.zeros((1, 3)))[0, 0] == 1.0
+    dark = light_tables([PointLight((0.0, 1.0, 0.0), 0.0)], selection="contribution")
+    assert selection(dark, np.zeros((1, 3)), np.zeros((1, 3)))[0, 0] == 0.0
+    u = np.array([[0.5, 0.5, 0.5]])
+    _, _, li, pdf, _, _ = sample_lights(dark, np.zeros((1, 3)), u)
+    assert pdf[0] == 0 and np.all(li == 0)  # nothing to sample: no shadow ray
+
+
+def test_a_hundred_lights_nearest_first(rng):
+    pos = np.column_stack([np.arange(100.0), np.full(100, 1.0), np.zeros(100)])
+    tb = light_tables([PointLight(x, 1.0) for x in pos], selection="contribution")
+    p = np.array([[37.0, 0.0, 0.0], [-1e6, 0.0, 0.0]])
+    pr = selection(tb, p, np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]))
+    assert np.allclose(pr.sum(axis=1), 1.0) and pr[0].argmax() == 37
+    assert np.all(np.diff(pr[0, 37:]) < 0) and np.all(np.diff(pr[0, :38]) > 0)
+    # choices follow the probabilities (chi-square-free check: frequencies within 5 sigma)
+    n = 20_000
+    u = np.column_stack([rng.random(n), np.full((n, 2), 0.5)])
+    at = np.tile(p[:1], (n, 1))
+    wi, dist, _, pdf, _, _ = sample_lights(tb, at, u)
+    chosen = np.rint((at + wi * dist[:, None])[:, 0]).astype(int)
+    q = selection(tb, p[:1], np.zeros((1, 3)))[0]
+    assert np.allclose(pdf, q[chosen], rtol=1e-12)  # delta lights: pdf = the probability
+    freq = np.bincount(chosen, minlength=100) / n
+    assert np.all(np.abs(freq - q) <= 5 * np.sqrt(q * (1 - q) / n) + 1e-12)
+
+
+def test_every_delta_light_leaves_the_others_to_the_selection():
+    tb = light_tables([PointLight((0.0, 0.0, 2.0), 5.0), DirectionalLight((0, -1, 0), 3.0),
+                       ConstantEnvironment(0.1)], [_quad(-1.0)], selection="contribution",
+                      every_delta=True)
+    p = np.array([[0.0, 0.0, 0.0], [3.0, 1.0, -2.0]])
+    pr = selection(tb, p, np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 0.0]]))
+    assert np.all(pr[:, :2] == 0) and np.allclose(pr.sum(axis=1), 1.0)
+
+
+def test_setting_is_checked():
+    with pytest.raises(ValueError, match="light_selection"):
+        RenderSettings(light_selection="nearest").validate()
+
+
+def _render(selection, every_delta, seed):
+    from render import material as M
+    from render.camera import Camera
+    from render.integrator import Integrator
+    from render.scene import Scene
+
+    grey = M.material(surface=M.material_surface(M.df.diffuse_reflection_bsdf(tint=0.6)))
+    floor = SceneObject(UnitSquare(), grey, make_transform(translate=(-2.0, 0.0, 2.0),
+                                                           rotate=(-90.0, 0.0, 0.0),
+                                                           scale=(4.0, 4.0, 1.0)))
+    lamp = SceneObject(UnitSquare(), emissive_material((np.pi * 8.0,) * 3),
+                       make_transform(translate=(-0.6, 1.0, -0.2), rotate=(90.0, 0.0, 0.0),
+                                      scale=(0.3, 0.3, 1.0)))
+    lights = [PointLight((0.8, 0.7, 0.3), 0.5), DirectionalLight((0.3, -1.0, -0.4), 1.0),
+              ConstantEnvironment(0.2)]
+    cam = Camera(position=(0.0, 2.0, 3.0), look_at=(0.0, 0.0, 0.0), fov_y_deg=50.0, width=24,
+                 height=24)
+    scene = Scene(cam, [floor, lamp], lights,
+                  RenderSettings(24, 24, spp=48, light_selection=selection,
+                                 every_delta_light=every_delta))
+    return Integrator(scene, scene.build()).render(seed=seed, progress=False, threads=1).rgb()
+
+
+def test_every_selection_renders_the_same_image_in_expectation():
+    """Unbiased whatever the selection: MIS weights use the probability the selection
+    had at the vertex the path left.  Pixels are independent: the difference of two
+    images' means is within 5 standard errors of 0."""
+    base = _render("uniform", False, 1)
+    for k, (selection, every) in enumerate([("contribution", False), ("contribution", True),
+                                            ("power", True)]):
+        other = _render(selection, every, 2 + k)
+        diff = (other - base).mean(axis=2).ravel()
+        assert abs(diff.mean()) < 5 * diff.std() / np.sqrt(diff.size), (selection, every)
+        assert diff.std() > 0
