@@ -431,7 +431,8 @@ class Integrator:
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
-            pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
+            pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p,
+            env_cdf, sky_params, sky_p, sky_cdf, scalars)
         return tables, params
 
     def _light_bounds(self, kinds, emit_light, flags):

@@ -817,8 +817,9 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
                     j, sel = jd, 1.0
                 (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
                     light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
-                    env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
+                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
+                    env_image, env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3],
+                    u[i, 4])
                 lpdf *= sel
                 ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
                                                               lx, ly, lz)

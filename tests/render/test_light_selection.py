@@ -159,9 +159,9 @@ def test_every_selection_renders_the_same_image_in_expectation():
     had at the vertex the path left.  Pixels are independent: the difference of two
     images' means is within 5 standard errors of 0."""
     base = _render("uniform", False, 1)
-    for k, (selection, every) in enumerate([("contribution", False), ("contribution", True),
-                                            ("power", True)]):
-        other = _render(selection, every, 2 + k)
+    for k, (kind, every) in enumerate([("contribution", False), ("contribution", True),
+                                       ("power", True)]):
+        other = _render(kind, every, 2 + k)
         diff = (other - base).mean(axis=2).ravel()
-        assert abs(diff.mean()) < 5 * diff.std() / np.sqrt(diff.size), (selection, every)
+        assert abs(diff.mean()) < 5 * diff.std() / np.sqrt(diff.size), (kind, every)
         assert diff.std() > 0
