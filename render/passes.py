@@ -17,6 +17,7 @@ per pixel in one pass); a time budget is spent in whole passes (at least one).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -119,9 +120,7 @@ def render_chunk(integrator, seed: int, item) -> FilmPatch:
     return FilmPatch.of_samples(pixel, rgb, alpha, aovs, integrator.aovs)
 
 
-_KEPT = False
-
-
+@functools.cache
 def keep_freed_memory() -> None:
     """Let glibc keep freed memory for reuse in this process (once per process).
 
@@ -132,10 +131,6 @@ def keep_freed_memory() -> None:
     mmap threshold, 64 MB trim).  Dask's nannies start workers with
     ``MALLOC_TRIM_THRESHOLD_=65536``, which also pins the mmap threshold at 128 kB:
     there, chunks took 2-2.5 times as long without this."""
-    global _KEPT
-    if _KEPT:
-        return
-    _KEPT = True
     import ctypes
     import sys
 
