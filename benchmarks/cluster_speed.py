@@ -288,7 +288,7 @@ def _in_process(integ, plan: PassPlan):
         film = Film(integ.camera.width, integ.camera.height)
         for k in range(plan.passes):
             for item in plan.chunks(k):
-                film.merge(render_chunk(integ, plan.seed, item))
+                film.merge(render_chunk(integ, plan, item))
     finally:
         numba.set_num_threads(before)
     return film

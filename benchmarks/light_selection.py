@@ -14,7 +14,8 @@ the ratios, not the absolute times).
   to their mean (a Lambertian cylinder along x seen by a camera without roll is the
   same along every row: the spread is pure noise), the median over its rows, next to
   the time per sample; the three selections, then ``contribution`` with the sun sampled
-  at every vertex besides the selected light (``every_delta_light``).
+  at every vertex besides the selected light (``every_delta_light``), each with
+  independent sample values and with the Sobol sampler (``[render] sampler``).
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ def _diffuse(tint):
 
 
 def molding_scene(width, height, lights, extra=(), selection="contribution", spp=16,
-                  every_delta=False):
+                  every_delta=False, sampler="sobol"):
     """A cylinder of radius 0.3 along x on a 14 x 6 floor, seen from the front."""
     floor = Plane(size=(14.0, 6.0), origin=(-7.0, 0.0, 3.0), axis_u=(1, 0, 0),
                   axis_v=(0, 0, -1))
@@ -63,7 +64,8 @@ def molding_scene(width, height, lights, extra=(), selection="contribution", spp
                  width=width, height=height)
     return Scene(cam, objects, list(lights),
                  RenderSettings(width, height, spp=spp, max_depth=8,
-                                light_selection=selection, every_delta_light=every_delta))
+                                light_selection=selection, every_delta_light=every_delta,
+                                sampler=sampler))
 
 
 def frieze_lights(n=100):
@@ -118,15 +120,17 @@ def sun_and_sky(args):
     lights = [DirectionalLight((0.5, -1.0, -0.6), 3.0), ConstantEnvironment(0.1)]
     print(f"# sun and sky: directional irradiance 3 + constant environment 0.1, {w}x{h}, "
           f"{args.spp} spp, {THREADS} threads; row noise on the molding (Cycles 5.0: 2.1%)")
-    for sel, every in [(s, False) for s in SELECTIONS] + [("contribution", True)]:
-        scene = molding_scene(w, h, lights, selection=sel, spp=args.spp, every_delta=every)
+    rows = [(s, False) for s in SELECTIONS] + [("contribution", True)]
+    for sampler, sel, every in [(m, s, e) for m in ("independent", "sobol") for s, e in rows]:
+        scene = molding_scene(w, h, lights, selection=sel, spp=args.spp, every_delta=every,
+                              sampler=sampler)
         integ = Integrator(scene, scene.build(), aovs=("object_id",))
         integ.render(spp=1, progress=False)  # warm-up
         film = integ.render(spp=args.spp, seed=1, progress=False, threads=THREADS)
         noise, n_rows = row_noise(film.rgb(), film.aov("object_id") == 1)
         per = film.stats["time_s"] / (w * h * args.spp) * 1e9
-        name = sel + (" + every delta light" if every else "")
-        print(f"sun+sky {name:>32}: row noise {noise:6.2%} over {n_rows} rows, "
+        name = f"{sampler}, {sel}" + (" + every delta light" if every else "")
+        print(f"sun+sky {name:>45}: row noise {noise:6.2%} over {n_rows} rows, "
               f"{per:.0f} ns per sample ({film.stats['time_s']:.1f} s)")
 
 

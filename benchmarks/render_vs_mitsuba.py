@@ -17,7 +17,9 @@ For each it measures
   (:func:`render.path.intersect` and :func:`render.path.shadow_trace`, which do nothing
   but call ``rtcIntersect1``/``rtcOccluded1``), and rays per sample;
 * equal-time error: both render for the same wall time, and their RMSE against a
-  converged reference (``--ref-spp``) is compared: Mitsuba's for the diffuse and glossy
+  converged reference (``--ref-spp``) is compared (Mitsuba with its ``independent``
+  sampler and with its ``ldsampler``, whose padded (0, 2)-sequences are the peer of
+  ours, :mod:`render.sampler`): Mitsuba's reference for the diffuse and glossy
   stages (the same model); for the layered and mixed stages, whose models differ in
   detail (libbsdf's Ashikhmin–Shirley lobe and layering against Beckmann
   ``roughplastic``), each renderer against its own reference, and the means side by
@@ -215,6 +217,11 @@ def mitsuba_render(mi, scene, spp, seed):
     return img, time.perf_counter() - t0
 
 
+def with_sampler(md, sampler):
+    """The scene dict ``md`` with the sensor's sampler plugin ``sampler``."""
+    return {**md, "sensor": {**md["sensor"], "sampler": {"type": sampler}}}
+
+
 def mitsuba_mesh(mi, name, vertices, normals, faces, shape: dict):
     """A Mitsuba mesh of triangles (positions, vertex normals) with the ``bsdf`` and
     ``emitter`` of the shape dict ``shape``."""
@@ -271,6 +278,8 @@ def main(argv=None) -> int:
                     choices=["contribution", "power", "uniform"],
                     help="ours: [render] light_selection (how next-event estimation picks "
                          "a light)")
+    ap.add_argument("--sampler", default="sobol", choices=["sobol", "independent"],
+                    help="ours: [render] sampler (where sample values come from)")
     ap.add_argument("--kinds", nargs="+", default=["diffuse", "glossy", "layered", "mixed"],
                     choices=["diffuse", "glossy", "layered", "mixed"])
     args = ap.parse_args(argv)
@@ -285,10 +294,13 @@ def main(argv=None) -> int:
     for kind in args.kinds:
         ours, md, cam = stage(kind, w, h)
         ours.settings.light_selection = args.light_selection
+        ours.settings.sampler = args.sampler
         geometry = ours.build()
         integ = Integrator(ours, geometry)
         names = [obj.name for obj in ours.objects]
-        mi_tri = mitsuba_scene(mi, same_triangles(mi, md, geometry, names), cam)
+        tri = same_triangles(mi, md, geometry, names)
+        mi_tri = mitsuba_scene(mi, tri, cam)
+        mi_ld = mitsuba_scene(mi, with_sampler(tri, "ldsampler"), cam)
         mi_analytic = mitsuba_scene(mi, md, cam)
         for sc in (mi_tri, mi_analytic):
             mitsuba_render(mi, sc, 4, 0)  # JIT warm-up
@@ -308,6 +320,11 @@ def main(argv=None) -> int:
         eq_ours = integ.render(time_budget=args.seconds, seed=3, progress=False, threads=THREADS)
         spp_mi_eq = max(1, int(round(mi_rate * args.seconds / pixels)))
         eq_mi, t_eq_mi = mitsuba_render(mi, mi_tri, spp_mi_eq, 4)
+        # Mitsuba's low-discrepancy sampler (padded (0, 2)-sequences, as ours): its spp is
+        # a power of two, the one nearest the equal-time count
+        spp_ld = 1 << max(0, int(round(np.log2(spp_mi_eq))))
+        mitsuba_render(mi, mi_ld, spp_ld, 0)  # JIT warm-up of this sampler
+        eq_ld, t_eq_ld = mitsuba_render(mi, mi_ld, spp_ld, 4)
         ours_rgb = eq_ours.rgb()
         rows.append(
             (
@@ -322,6 +339,8 @@ def main(argv=None) -> int:
                 f"{np.sqrt(np.mean((ours_rgb - ref) ** 2)):.4f}",
                 f"{spp_mi_eq} ({t_eq_mi:.1f})",
                 f"{np.sqrt(np.mean((eq_mi - mi_ref) ** 2)):.4f}",
+                f"{spp_ld} ({t_eq_ld:.1f})",
+                f"{np.sqrt(np.mean((eq_ld - mi_ref) ** 2)):.4f}",
                 f"{(ours_rgb.mean() - mi_ref.mean()) / mi_ref.mean():+.2%}",
             )
         )
@@ -337,13 +356,15 @@ def main(argv=None) -> int:
         "ours RMSE",
         "Mitsuba spp (s)",
         "Mitsuba RMSE",
+        "Mitsuba ldsampler spp (s)",
+        "Mitsuba ldsampler RMSE",
         "our mean vs Mitsuba's reference",
     )
     print(
         f"# {w}x{h}, max depth 8, {THREADS} threads; Msamples/s; Mitsuba reference "
         f"{args.ref_spp} spp on the same triangles (layered, mixed: ours against our own "
         f"{max(args.ref_spp // 4, 1)}-spp reference); equal time {args.seconds} s; "
-        f"light selection {args.light_selection}; "
+        f"light selection {args.light_selection}; sampler {args.sampler}; "
         f"CPU SIMD: {simd_flags()}"
     )
     if args.markdown:

@@ -2,7 +2,8 @@
 ``dask.distributed`` workers, and the client merges their patches into one film.
 
 The image is bit-identical to the in-process render with the same seed, whatever the
-number of workers: each chunk has its own random stream, and the client merges the
+number of workers: a sample's values depend only on its pixel, its index and the seed
+(:mod:`render.sampler`), and the client merges the
 chunks' :class:`~render.film.FilmPatch` results in (pass, chunk) order, whole passes
 at a time, as :meth:`render.integrator.Integrator.render` does.
 
@@ -24,7 +25,7 @@ How the work travels:
   of tasks in flight (twice the cluster's threads, at least one pass) so every worker
   stays busy across passes.  A worker that dies takes its running
   chunks with it; the scheduler runs them again elsewhere, and since a chunk's result
-  depends only on its random stream, the image is unchanged.
+  depends only on its samples' pixels, indices and the seed, the image is unchanged.
 * **The time budget** holds across workers: once it is spent (and one pass is merged)
   the client cancels the chunks in flight and keeps the whole passes merged so far.
 
@@ -333,14 +334,14 @@ def _prepare_task(name: str) -> dict:
     }
 
 
-def _chunks_task(name: str, seed: int, items) -> tuple:
+def _chunks_task(name: str, plan: PassPlan, items) -> tuple:
     """Render consecutive chunks on this worker: their patches, in order (each chunk's
     own, not their sum: the client adds them one by one, as in-process), and the cost."""
     worker, plugin = _plugin(name)
     integ = plugin.prepared()
     rays, embree = integ.rays, integ.embree_time
     t0 = _time.perf_counter()
-    patches = [render_chunk(integ, seed, item) for item in items]
+    patches = [render_chunk(integ, plan, item) for item in items]
     info = {
         "worker": worker.address,
         "pid": os.getpid(),
@@ -371,7 +372,7 @@ def render_on_cluster(
     ``chunks_per_task`` (default: one per 6 threads of the cluster, at least one) sets
     how many consecutive chunks of a pass one task renders: the scheduler and the client
     pay per task, so a large cluster needs longer tasks (``docs/distributed.md``); the
-    chunks, their random streams and the image stay the same.
+    chunks, their sample values and the image stay the same.
 
     Returns
     -------
@@ -544,7 +545,7 @@ def _render_passes(
             if k not in size:
                 size[k] = len(plan.chunks(k))
             fut = client.submit(
-                _chunks_task, name, plan.seed, items, key=f"{name}-chunks-{k}-{a}", pure=False
+                _chunks_task, name, plan, items, key=f"{name}-chunks-{k}-{a}", pure=False
             )
             in_flight[fut] = items
             ac.add(fut)

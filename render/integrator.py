@@ -3,7 +3,8 @@ compiled stages of :mod:`render.path`.
 
 Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` integrators):
 
-* primary rays through random points of each pixel (box filter);
+* primary rays through random points of each pixel (box filter); every sample value
+  of a path is an Owen-scrambled Sobol point of its pixel (:mod:`render.sampler`);
 * per segment, every live lane through Embree (:func:`render.path.intersect`), then one
   compiled pass over the lanes (:func:`render.path.bounce`): emission found by a ray is
   weighted by multiple importance sampling (power heuristic) against next-event
@@ -58,10 +59,10 @@ Interfaces, thin walls and volumes (``reference/mdl-distribution-functions.md`` 
   welding) enclose a medium; an open surface (a square) is an interface without an
   inside.  The camera must be outside every closed object.
 
-Parallelism: the image's samples are cut into fixed chunks; each chunk has its own
-random stream (``SeedSequence([seed, pass, chunk])``), so the image does not depend on
-how many threads run, and two threads trace their own chunks at once (the kernels and
-Embree release the GIL).  Same seed, same image.
+Parallelism: the image's samples are cut into fixed chunks, and two threads trace their
+own chunks at once (the kernels and Embree release the GIL).  A sample's values depend
+only on its pixel, its index in the pixel and the seed, so the image does not depend on
+how many threads run or how the samples are cut.  Same seed, same image.
 """
 
 from __future__ import annotations
@@ -90,6 +91,16 @@ from render.lights import (
 from render.numerics import dot
 from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
 from render.program import ProgramTable
+from render.sampler import (
+    CAMERA_PAIR,
+    FIRST_SEGMENT_PAIR,
+    HERO_PAIR,
+    PAIRS_PER_SEGMENT,
+    SAMPLERS,
+    pair_values,
+    segment_values,
+    shadow_values,
+)
 from render.sky import SunAndSky
 from render.volume import MAX_NESTING, is_closed, medium_of
 
@@ -289,7 +300,7 @@ class Integrator:
         self.rays = 0
         self._count_lock = threading.Lock()  # two threads trace chunks at once
         # compile (or load from numba's cache) before worker threads start
-        self.trace(np.zeros(1, dtype=np.int64), np.random.default_rng(0))
+        self.trace(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), 0)
 
     # ------------------------------------------------------------------ setup
     def _constant_program(self, k: int, back: bool):
@@ -400,7 +411,12 @@ class Integrator:
         else:
             sky_params, sky_p, sky_cdf = sky.kernel_params(), sky._p, sky._cdf
         scalars = np.zeros(kern.N_SCALARS)
-        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[self.settings.light_selection]
+        # an environment the only light to choose (the rest sampled at every vertex): its
+        # importance is the same everywhere, so there is nothing to weigh per vertex
+        chosen = [light for light in lights if not (self.every_delta and light.delta)]
+        alone = len(chosen) == 1 and chosen[0].infinite
+        mode = "uniform" if alone else self.settings.light_selection
+        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[mode]
                                         + (kern.EVERY_DELTA if self.every_delta else 0))
         env_index = [j for j, light in enumerate(lights) if light.infinite]
         scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
@@ -647,8 +663,9 @@ class Integrator:
         return tables, params, lane_row, bf, bslot
 
     # --------------------------------------------------------------- one chunk
-    def trace(self, pixel: np.ndarray, rng: np.random.Generator) -> tuple:
-        """Trace one path per entry of ``pixel``.
+    def trace(self, pixel: np.ndarray, index: np.ndarray, seed: int) -> tuple:
+        """Trace one path per entry of ``pixel``: sample ``index`` of that pixel, its
+        sample values from :mod:`render.sampler` (seeded ``seed``).
 
         Returns
         -------
@@ -657,7 +674,9 @@ class Integrator:
         aovs : dict of arrays
         """
         n = len(pixel)
-        o, d = primary_rays(self.camera, pixel, rng.random((n, 2)))
+        kind = SAMPLERS[self.settings.sampler]
+        o, d = primary_rays(self.camera, pixel,
+                            pair_values(pixel, index, CAMERA_PAIR, seed, kind))
         lf = np.zeros((n, kern.NF))
         lf[:, kern.ORG:kern.ORG + 3] = o
         lf[:, kern.D:kern.D + 3] = d
@@ -669,7 +688,8 @@ class Integrator:
         li[:, kern.DELTA] = 1  # camera rays count as specular (no MIS)
         li[:, kern.FIRST] = 1
         if self.media:  # one hero channel per path, drawn only in scenes with media
-            li[:, kern.HERO] = np.minimum((rng.random(n) * 3).astype(np.int64), 2)
+            hero = pair_values(pixel, index, HERO_PAIR, seed, kind)[:, 0]
+            li[:, kern.HERO] = np.minimum((hero * 3).astype(np.int64), 2)
         so = np.full((n, self.nesting), -1, dtype=np.int64)
         sior = np.ones((n, self.nesting))
         L = np.zeros((n, 3))
@@ -683,17 +703,20 @@ class Integrator:
         face = np.empty(n, dtype=np.int64)
         b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
         u = np.empty((n, 9))
+        segment = 0
         while n:
             t0 = _time.perf_counter()
             kern.intersect(self.scene_handle, self.tables, lf, n, face, b1, b2, t)
             self._count(n, _time.perf_counter() - t0)
-            rng.random(out=u[:n])
+            pairs = FIRST_SEGMENT_PAIR + segment * PAIRS_PER_SEGMENT
+            segment_values(u, n, li[:, kern.ID], pixel, index, pairs, seed, kind)
             tables, params, lane_row, bf, bslot = self._bind(
                 face[:n], b1[:n], b2[:n], lf[:n, kern.D:kern.D + 3], so, sior, li[:n, kern.NSTK])
             n, ns = kern.bounce(tables, n, face, b1, b2, t, lf, li, so, sior, u, lane_row, params,
                                 bf, bslot, L, alpha, aov, *nxt, *shadow[0], kern.scratch(tables))
-            self._shadows(ns, shadow, rng, L)
+            self._shadows(ns, shadow, (pixel, index, seed, segment, kind), L)
             (lf, li, so, sior), nxt = nxt, (lf, li, so, sior)
+            segment += 1
         aovs = {}
         if self.aovs:
             a = {"albedo": aov[:, 0:3], "normal": aov[:, 3:6], "depth": aov[:, 6],
@@ -707,9 +730,11 @@ class Integrator:
                  np.empty((n, self.nesting), dtype=np.int64), np.empty((n, self.nesting)))
                 for _ in range(2)]
 
-    def _shadows(self, ns, buffers, rng, L):
+    def _shadows(self, ns, buffers, sample, L):
         """Trace the ``ns`` shadow records in ``buffers[0]`` to their lights (through
-        cutouts and null surfaces), adding what arrives to ``L``."""
+        cutouts and null surfaces), adding what arrives to ``L``; ``sample`` is the
+        segment's ``(pixel, index, seed, segment, sampler kind)`` (the cutouts' sample
+        values)."""
         sf, si = buffers[0][0], buffers[0][1]
         deferred = np.flatnonzero(si[:ns, kern.S_FACE] >= 0)
         if len(deferred):  # area lights whose radiance varies: evaluate it now
@@ -733,7 +758,7 @@ class Integrator:
             tables, params, (lane_row, bf, bslot) = self.tables, self.params, none
             u = t  # not read: no cutouts
             if any_pass:
-                u = rng.random(ns)
+                u = shadow_values(ns, cur[1], *sample)
                 tables, params, lane_row, bf, bslot = self._bind(
                     face[:ns], b1[:ns], b2[:ns], cur[0][:ns, kern.S_D:kern.S_D + 3], cur[2],
                     cur[3], cur[1][:ns, kern.S_NSTK], only=self.passable)
@@ -787,7 +812,7 @@ class Integrator:
         start = _time.perf_counter()
         self.embree_time = 0.0
         self.rays = 0
-        work = partial(render_chunk, self, plan.seed)
+        work = partial(render_chunk, self, plan)
 
         pool = ThreadPoolExecutor(max_workers=threads) if threads > 1 else None
         done = 0

@@ -1,11 +1,11 @@
-"""How an image's samples are cut into passes and chunks, each chunk with its own random
-stream, so the image does not depend on who renders which chunk.
+"""How an image's samples are cut into passes and chunks, so that the image does not
+depend on who renders which chunk.
 
 A render is a sequence of *passes*; pass ``k`` draws ``pass_spp(k)`` samples for every
 pixel.  Its ``npix * pass_spp(k)`` samples are numbered pixel-major (sample ``s`` is in
-pixel ``s // pass_spp(k)``) and cut into chunks of :data:`CHUNK` samples.  Chunk
-``[a, b)`` of pass ``k`` draws its random numbers from
-``SeedSequence([seed, k, a])`` (:func:`chunk_rng`), and its result is a
+pixel ``s // pass_spp(k)``, the pixel's sample ``k * per_pass + s % pass_spp(k)``) and
+cut into chunks of :data:`CHUNK` samples.  A sample's values depend only on its pixel,
+its index and the seed (:mod:`render.sampler`); a chunk's result is a
 :class:`~render.film.FilmPatch`.  Merging the patches in (pass, chunk) order gives the
 same bits whichever thread, process or machine traced them: the in-process loop
 (:meth:`render.integrator.Integrator.render`) and the Dask driver
@@ -24,9 +24,9 @@ import numpy as np
 
 from render.film import FilmPatch
 
-__all__ = ["CHUNK", "PASS_SAMPLES", "PassPlan", "chunk_rng", "render_chunk"]
+__all__ = ["CHUNK", "PASS_SAMPLES", "PassPlan", "render_chunk"]
 
-#: samples per work item (each has its own random stream)
+#: samples per work item
 CHUNK = 1 << 16
 #: fewest samples in one pass (the unit of the time budget and of the progress bar)
 PASS_SAMPLES = 1 << 19
@@ -105,18 +105,13 @@ class PassPlan:
         return sum(-(-self.npix * self.pass_spp(k) // CHUNK) for k in range(self.passes))
 
 
-def chunk_rng(seed: int, pass_index: int, start: int) -> np.random.Generator:
-    """The random stream of the chunk of pass ``pass_index`` starting at sample ``start``."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, pass_index, start])))
-
-
-def render_chunk(integrator, seed: int, item) -> FilmPatch:
-    """Trace one work item of :meth:`PassPlan.chunks` with ``integrator``
+def render_chunk(integrator, plan: PassPlan, item) -> FilmPatch:
+    """Trace one work item of ``plan`` (:meth:`PassPlan.chunks`) with ``integrator``
     (:class:`render.integrator.Integrator`) and sum it into a patch."""
-    pass_index, k_spp, (a, b) = item
+    k, k_spp, (a, b) = item
     keep_freed_memory()
-    pixel = np.arange(a, b, dtype=np.int64) // k_spp
-    rgb, alpha, aovs = integrator.trace(pixel, chunk_rng(seed, pass_index, a))
+    pixel, within = np.divmod(np.arange(a, b, dtype=np.int64), k_spp)
+    rgb, alpha, aovs = integrator.trace(pixel, k * plan.per_pass + within, plan.seed)
     return FilmPatch.of_samples(pixel, rgb, alpha, aovs, integrator.aovs)
 
 

@@ -176,6 +176,9 @@ class RenderSettings:
     every_delta_light : bool
         Sample each point, spot and directional light at every vertex (when a scene
         has at most four), besides the light selected among the others.
+    sampler : {"sobol", "independent"}
+        Where a path's sample values come from (:mod:`render.sampler`): Owen-scrambled
+        Sobol points of its pixel, or independent uniforms.
     """
 
     width: int = 256
@@ -195,6 +198,7 @@ class RenderSettings:
     dice_invisible: bool = False
     light_selection: str = "contribution"
     every_delta_light: bool = True
+    sampler: str = "sobol"
 
     def validate(self) -> RenderSettings:
         for name in ("width", "height", "spp", "spp_per_pass"):
@@ -233,6 +237,8 @@ class RenderSettings:
         if self.light_selection not in ("contribution", "power", "uniform"):
             raise ValueError("light_selection must be one of 'contribution', 'power', "
                              f"'uniform', got {self.light_selection!r}")
+        if self.sampler not in ("sobol", "independent"):
+            raise ValueError(f"sampler must be 'sobol' or 'independent', got {self.sampler!r}")
         for name in ("denoise", "dice_invisible", "every_delta_light"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
@@ -1016,6 +1022,7 @@ class _Parser:
             "dice_invisible",
             "light_selection",
             "every_delta_light",
+            "sampler",
         }
         self._check_keys(t, allowed, "render")
         s = RenderSettings()
@@ -1049,6 +1056,7 @@ class _Parser:
             "dice_invisible",
             "light_selection",
             "every_delta_light",
+            "sampler",
         ):
             if key in t:
                 setattr(s, key, t[key])

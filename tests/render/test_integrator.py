@@ -225,7 +225,8 @@ def test_cutout_opacity_alpha_and_blend():
     film = render(scene, progress=False)
     for img, want in ((film.alpha(), op), (film.rgb()[..., 0], 1 - op)):
         mean, err = mean_and_error(img[..., None])
-        assert abs(mean[0] - want) < 4 * err[0], (mean, err, want)
+        # (64 stratified samples pass the cutout exactly 48 times in every pixel: err 0)
+        assert abs(mean[0] - want) <= 4 * err[0] + 1e-12, (mean, err, want)
     # a varying cutout (the left half of the square removed) also stops shadow rays stochastically
     mat2 = M.material(
         surface=M.material_surface(M.df.diffuse_reflection_bsdf(tint=1.0)),

@@ -181,11 +181,19 @@ def _mitsuba_image(mi, mdict, cam, spp, seed=0):
 
 
 def _two(render_fn):
-    """Mean of two renders with different seeds, and the standard deviation of one
-    pixel's noise in it (from their difference)."""
+    """Mean of two renders with different seeds, and half their difference, whose spread
+    over a set of pixels is the standard deviation of one pixel's noise in the mean (one
+    render's pixel noise is std(x - y) / sqrt(2); their mean has 1/sqrt(2) of it).  The
+    spread is taken over the pixels compared (:func:`_noise`): the noise of a glass
+    sphere is not the floor's."""
     x, y = render_fn(1), render_fn(2)
-    # one render's pixel noise is std(x - y) / sqrt(2); their mean has 1/sqrt(2) of it
-    return 0.5 * (x + y), 0.5 * (x - y).reshape(-1, 3).std(axis=0)
+    return 0.5 * (x + y), 0.5 * (x - y)
+
+
+def _noise(half_a, half_b, mask):
+    """4 standard errors of the difference of two images' means over ``mask``."""
+    na, nb = half_a[mask].reshape(-1, 3).std(axis=0), half_b[mask].reshape(-1, 3).std(axis=0)
+    return 4.0 * np.hypot(na, nb) / np.sqrt(mask.sum())
 
 
 def _compare(mi, kind, params, spp_ours, spp_mi, systematic):
@@ -198,7 +206,7 @@ def _compare(mi, kind, params, spp_ours, spp_mi, systematic):
         ma, mb = a[region].mean(axis=0), b[region].mean(axis=0)
         # 4 standard errors of the difference of the two means, plus the measured
         # systematic difference of the models
-        noise = 4.0 * np.hypot(na, nb) / np.sqrt(region.sum())
+        noise = _noise(na, nb, region)
         assert np.all(np.abs(ma - mb) <= noise + systematic * mb), (
             ma,
             mb,
@@ -315,7 +323,7 @@ def _compare_scenes(mi, ours, mdict, cam, spp_ours, spp_mi, systematic, region_i
     out = []
     for mask in (np.ones_like(region), region):
         ma, mb = a[mask].mean(axis=0), b[mask].mean(axis=0)
-        noise = 4.0 * np.hypot(na, nb) / np.sqrt(mask.sum())
+        noise = _noise(na, nb, mask)
         out.append((ma - mb) / mb)
         assert np.all(np.abs(ma - mb) <= noise + systematic * mb), (
             ma, mb, (ma - mb) / mb, noise / mb)
@@ -388,7 +396,7 @@ def test_thin_walled_backface_vs_twosided(mi):
     b, nb = _two(lambda seed: image(mi, mdict, cam, 128, seed=seed))
     for mask in (region >= 0, region == 1, region == 3):
         ma, mb = a[mask].mean(axis=0), b[mask].mean(axis=0)
-        noise = 4.0 * np.hypot(na, nb) / np.sqrt(mask.sum())
+        noise = _noise(na, nb, mask)
         assert np.all(np.abs(ma - mb) <= noise + VOLUME_TOLERANCES["twosided"] * mb), (
             ma, mb, (ma - mb) / mb, noise / mb)
     # the right square shows its back: blue, the left its front: red
@@ -461,7 +469,7 @@ def test_thin_walled_pane_vs_thindielectric(mi):
     a, na = _two(lambda seed: render(ours, spp=32, seed=seed, progress=False).rgb())
     b, nb = _two(lambda seed: _mitsuba_ortho_image(mi, mdict, cam, 128, seed=seed))
     ma, mb = a.reshape(-1, 3).mean(axis=0), b.reshape(-1, 3).mean(axis=0)
-    noise = 4.0 * np.hypot(na, nb) / np.sqrt(RES * RES)
+    noise = _noise(na, nb, np.ones((RES, RES), dtype=bool))
     assert np.all(np.abs(ma - mb) <= noise + VOLUME_TOLERANCES["thin_pane"] * mb), (
         ma, mb, (ma - mb) / mb, noise / mb)
     ba = a.reshape(8, RES // 8, 8, RES // 8, 3).mean(axis=(1, 3))

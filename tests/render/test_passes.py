@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from render.film import AOVS, Film, FilmPatch
-from render.passes import CHUNK, PASS_SAMPLES, PassPlan, chunk_rng
+from render.passes import CHUNK, PASS_SAMPLES, PassPlan
 from render.scene import RenderSettings
 
 #: every float64 worth a test: huge (sums overflow), subnormal, signed zeros, inf, nan
@@ -127,8 +127,3 @@ def test_time_budget_plan_and_overrides():
     assert (plan.passes, plan.per_pass, plan.time_budget, plan.seed) == (1, 5, None, 9)
 
 
-def test_a_chunk_stream_is_its_seed_pass_and_start():
-    a = chunk_rng(3, 1, 65536).random(4)
-    assert np.array_equal(a, chunk_rng(3, 1, 65536).random(4))
-    for other in (chunk_rng(4, 1, 65536), chunk_rng(3, 2, 65536), chunk_rng(3, 1, 0)):
-        assert not np.array_equal(a, other.random(4))

@@ -314,7 +314,8 @@ def test_shadow_transmittance_inside_a_medium():
         sso[:] = 0  # inside object 0
         ssior[:] = 1.0
         L = np.zeros((2, 3))
-        integ._shadows(2, buffers, np.random.default_rng(0), L)
+        sample = (np.zeros(2, dtype=np.int64), np.arange(2), 0, 0, 0)  # pixel, index, seed, ...
+        integ._shadows(2, buffers, sample, L)
         assert np.allclose(L, np.exp(-np.outer([0.75, 1.5], sigma)), rtol=1e-9)
 
 

@@ -1,0 +1,194 @@
+"""The path tracer's sample values: Owen-scrambled Sobol points, padded in pairs.
+
+A path's random numbers are not drawn from a stream.  Sample ``index`` of pixel
+``pixel`` takes dimension pair ``pair`` (the pixel position, the light sample of a
+vertex, its bsdf sample, ...) from the 2D Sobol sequence, as Burley's hash-based Owen
+scrambling does it ("Practical Hash-based Owen Scrambling", JCGT 9(4), 2020; the same
+scheme as Blender Cycles' Sobol-Burley pattern and pbrt-v4's ``PaddedSobolSampler``):
+
+* the sample index is shuffled by a nested uniform (Owen) scramble seeded by
+  ``(seed, pixel, pair)``, so that each pair is an independent permutation of the
+  sequence (*padding*: pairs are not correlated with each other);
+* the first two Sobol dimensions of the shuffled index form a (0, 2)-sequence: any
+  first ``2^k`` samples of a pixel are stratified in every dyadic box of area
+  ``2^-k``;
+* each coordinate is Owen-scrambled with its own seed, so every sample is uniform on
+  ``[0, 1)^2`` and pixels are independent estimates (tests may take the spread of
+  pixels as the noise, as with independent random numbers).
+
+Every value depends only on ``(seed, pixel, index, pair)``: the image does not depend
+on how the samples are cut into chunks or passes.  Stratification lowers the noise of
+the integrals that a few pairs decide (the pixel footprint, direct light, the first
+bounce) well below independent sampling's at the same sample count (measured in
+``docs/render.md``, "Sample values").
+
+Examples
+--------
+>>> import numpy as np
+>>> u = pair_values(np.zeros(16, np.int64), np.arange(16), 0, 7)
+>>> bool(u.min() >= 0.0 and u.max() < 1.0)
+True
+>>> # 16 samples: one in each of the 4 x 4 strata (a (0, 4, 2)-net)
+>>> sorted(np.unique((u * 4).astype(int) @ [4, 1]).tolist()) == list(range(16))
+True
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from render.jit import njit
+
+__all__ = ["CAMERA_PAIR", "FIRST_SEGMENT_PAIR", "HERO_PAIR", "PAIRS_PER_SEGMENT",
+           "SAMPLERS", "SEGMENT_COLUMNS", "pair_values", "segment_values", "shadow_values"]
+
+_M32 = 0xFFFFFFFF
+
+
+def _direction_numbers() -> np.ndarray:
+    """(32,) the generator matrix columns of Sobol's second dimension (primitive
+    polynomial x + 1, m_1 = 1): m_k = m_{k-1} xor 2 m_{k-1}, v_k = m_k 2^(32 - k)."""
+    v = np.zeros(32, dtype=np.int64)
+    m = 1
+    for k in range(1, 33):
+        v[k - 1] = (m << (32 - k)) & _M32
+        m ^= m << 1
+    return v
+
+
+def _byte_tables(v: np.ndarray) -> np.ndarray:
+    """(4, 256) the xor of the columns ``v`` selected by each byte value at each of the
+    four byte positions of an index (four lookups instead of a loop over 32 bits)."""
+    t = np.zeros((4, 256), dtype=np.int64)
+    for pos in range(4):
+        for b in range(256):
+            for k in range(8):
+                if (b >> k) & 1:
+                    t[pos, b] ^= v[8 * pos + k]
+    return t
+
+
+_V1 = _byte_tables(_direction_numbers())
+
+#: the pairs of a path: the position in the pixel, the hero channel (media), then
+#: :data:`PAIRS_PER_SEGMENT` per path segment; shadow rays' cutout decisions take theirs
+#: from ``SHADOW_PAIRS`` on (by segment and crossing), apart from the paths'
+CAMERA_PAIR, HERO_PAIR, FIRST_SEGMENT_PAIR = 0, 1, 2
+#: ``[render] sampler``: Owen-scrambled Sobol points, or independent uniforms (a hash of
+#: the same pixel, index and pair: for comparison, and for checks that want them)
+SOBOL, INDEPENDENT = 0, 1
+SAMPLERS = {"sobol": SOBOL, "independent": INDEPENDENT}
+SHADOW_PAIRS = 1 << 40
+
+#: a segment's nine uniforms (``u[:, 0..8]`` of :func:`render.path.bounce`) as five
+#: pairs: (light position), (bsdf direction), (light choice, bsdf lobe), (free flight,
+#: roulette), (cutout, unused); the pairs that decide 2D integrals are Sobol's (0, 2)
+SEGMENT_COLUMNS = np.array([[3, 4], [6, 7], [2, 5], [0, 8], [1, -1]], dtype=np.int64)
+PAIRS_PER_SEGMENT = len(SEGMENT_COLUMNS)
+
+
+@njit(inline="always")
+def _reverse(x):
+    """The 32 bits of ``x`` in reverse order."""
+    x = ((x >> 1) & 0x55555555) | ((x & 0x55555555) << 1)
+    x = ((x >> 2) & 0x33333333) | ((x & 0x33333333) << 2)
+    x = ((x >> 4) & 0x0F0F0F0F) | ((x & 0x0F0F0F0F) << 4)
+    x = ((x >> 8) & 0x00FF00FF) | ((x & 0x00FF00FF) << 8)
+    return ((x >> 16) & 0xFFFF) | ((x & 0xFFFF) << 16)
+
+
+@njit(inline="always")
+def _owen(x, seed):
+    """Nested uniform (Owen) scramble of the 32-bit ``x``: Burley's Laine-Karras-style
+    hash on the reversed bits (each bit flipped by a hash of the bits above it)."""
+    x = _reverse(x)
+    x = (x + seed) & _M32
+    x ^= (x * 0x6C50B47C) & _M32
+    x ^= (x * 0xB82F1E52) & _M32
+    x ^= (x * 0xC7AFE638) & _M32
+    x ^= (x * 0x8D22F6E6) & _M32
+    return _reverse(x)
+
+
+@njit(inline="always")
+def _mix(h):
+    """splitmix64's finalizer: 64 well-mixed bits of ``h``."""
+    h = (h ^ (h >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    h = (h ^ (h >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return h ^ (h >> np.uint64(31))
+
+
+@njit(inline="always")
+def _pixel_hash(seed, pixel):
+    """64 bits that name ``pixel`` of the render seeded ``seed``."""
+    return _mix(np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(pixel))
+
+
+@njit(inline="always")
+def _pair(v1, ph, index, pair, kind):
+    """Sample ``index`` of the pixel hashed ``ph`` (:func:`_pixel_hash`) in dimension
+    pair ``pair``: two uniforms in [0, 1) (``kind`` SOBOL or INDEPENDENT)."""
+    h = _mix(ph ^ np.uint64(pair))
+    m = np.uint64(_M32)
+    scale = 1.0 / 4294967296.0
+    if kind == INDEPENDENT:
+        h = _mix(h ^ (np.uint64(index) * np.uint64(0x9E3779B97F4A7C15)))
+        return float(h >> np.uint64(32)) * scale, float(h & m) * scale
+    s_i, s_x = np.int64(h & m), np.int64(h >> np.uint64(32))
+    s_y = np.int64((h * np.uint64(0xD6E8FEB86659FD93)) >> np.uint64(32))
+    i = _owen(index & _M32, s_i)
+    x = _reverse(i)  # Sobol's first dimension: the radical inverse
+    # the second: the xor of the generator columns of i's set bits, a byte at a time
+    y = v1[0, i & 255] ^ v1[1, (i >> 8) & 255] ^ v1[2, (i >> 16) & 255] ^ v1[3, i >> 24]
+    return float(_owen(x, s_x)) * scale, float(_owen(y, s_y)) * scale
+
+
+@njit(allocates=True)
+def _pair_values(v1, pixel, index, pair, seed, kind):
+    n = len(pixel)
+    out = np.empty((n, 2))
+    for i in range(n):
+        out[i, 0], out[i, 1] = _pair(v1, _pixel_hash(seed, pixel[i]), index[i], pair, kind)
+    return out
+
+
+def pair_values(pixel: np.ndarray, index: np.ndarray, pair: int, seed: int,
+                kind: int = SOBOL) -> np.ndarray:
+    """(n, 2) the values of dimension pair ``pair`` for samples ``index`` (n,) of
+    pixels ``pixel`` (n,) (both int64)."""
+    return _pair_values(_V1, np.asarray(pixel, dtype=np.int64),
+                        np.asarray(index, dtype=np.int64), int(pair), int(seed), int(kind))
+
+
+@njit
+def _segment_values(v1, columns, u, n, lane, pixel, index, first_pair, seed, kind):
+    for i in range(n):
+        j = lane[i]
+        ph = _pixel_hash(seed, pixel[j])
+        for g in range(len(columns)):
+            a, b = _pair(v1, ph, index[j], first_pair + g, kind)
+            u[i, columns[g, 0]] = a
+            if columns[g, 1] >= 0:
+                u[i, columns[g, 1]] = b
+
+
+def segment_values(u, n, lane, pixel, index, first_pair, seed, kind=SOBOL) -> None:
+    """Fill ``u[:n]`` (the nine uniforms of a path segment, :data:`SEGMENT_COLUMNS`)
+    for the ``n`` live lanes, lane ``i`` being sample ``index[lane[i]]`` of pixel
+    ``pixel[lane[i]]``, from pairs ``first_pair ...`` (compiled, no Python per lane)."""
+    _segment_values(_V1, SEGMENT_COLUMNS, u, n, lane, pixel, index, first_pair, seed, kind)
+
+
+@njit(allocates=True)
+def _shadow_values(v1, ns, si, pixel, index, seed, first_pair, kind):
+    u = np.empty(ns)
+    for r in range(ns):
+        j = si[r, 0]  # the record's lane (render.path.S_ID)
+        u[r] = _pair(v1, _pixel_hash(seed, pixel[j]), index[j], first_pair + si[r, 3], kind)[0]
+    return u
+
+
+def shadow_values(ns, si, pixel, index, seed, segment, kind=SOBOL) -> np.ndarray:
+    """(ns,) the uniforms that decide whether the shadow records ``si[:ns]`` (int columns
+    of :mod:`render.path`) pass the cutout they reached in path segment ``segment``."""
+    return _shadow_values(_V1, ns, si, pixel, index, seed, SHADOW_PAIRS + (segment << 8), kind)
