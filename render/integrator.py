@@ -190,27 +190,6 @@ def _luminance(rgb):
     return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
 
 
-def _mean_radiance(env) -> float:
-    """An environment's radiance (luminance) averaged over the sphere: exact for a
-    constant or a lat-long map, by 4096 importance samples for the sun and sky."""
-    if isinstance(env, ConstantEnvironment):
-        return float(_luminance(env.radiance))
-    if isinstance(env, LatLongEnvironment):
-        rows = np.arange(env.h)
-        solid = (np.cos(np.pi * rows / env.h) - np.cos(np.pi * (rows + 1) / env.h)) / (2 * env.w)
-        return float((_luminance(env.image) * solid[:, None]).sum())
-    from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
-
-    params, u = env.kernel_params(), np.random.default_rng(0).random((4096, 2))
-    total = 0.0
-    for a, b in u:
-        d = sun_and_sky_sample(params, env._p, env._cdf, a, b)
-        pdf = sun_and_sky_pdf(params, env._p, d[0], d[1], d[2])
-        if pdf > 0.0:
-            total += float(_luminance(sun_and_sky_eval(params, d[0], d[1], d[2]))) / pdf
-    return total / (4096 * 4.0 * np.pi)
-
-
 class Integrator:
     """A path tracer for one built scene.
 
@@ -449,16 +428,38 @@ class Integrator:
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
             pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p,
             env_cdf, sky_params, sky_p, sky_cdf, scalars)
+        self._environment_bounds(tables)
         return tables, params
+
+    def _environment_bounds(self, tables, samples: int = 1 << 14) -> None:
+        """Each environment's irradiance as three bands of spherical harmonics
+        (:func:`render.path.environment_sh`, by ``samples`` of its own importance
+        sampling at Sobol points) into ``light_params[j, 0:9]``, and its intensity (pi
+        times the mean radiance: the harmonics' constant band) and power into
+        ``light_bounds``."""
+        u = pair_values(np.zeros(samples, dtype=np.int64), np.arange(samples), 0, 0)
+        for j, light in enumerate(self.lights.lights):
+            if light.infinite:
+                c = kern.environment_sh(tables, j, u)
+                tables.light_params[j, 0:9] = c
+                e = max(float(c[0]) * kern.SH_Y00, 0.0)
+                tables.light_bounds[j, kern.LB_I] = e
+                tables.light_bounds[j, kern.LB_PHI] = self._scene_disk() * e
+
+    def _scene_disk(self) -> float:
+        """pi r^2 of the scene's bounding sphere (the cross-section a distant light
+        covers, for its power)."""
+        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
+        return np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
 
     def _light_bounds(self, kinds, emit_light, flags):
         """(l, NLB) what each light can contribute (:func:`render.path._importance`):
         bounding sphere, emission cone, intensity (area lights: mean radiance x area,
         directional: irradiance, environments: pi x mean radiance; luminance) and power
         (pbrt-v4's ``Light::Phi``: pi L A, 4 pi I, a spot's cone, pi r^2 E for a directional
-        light and pi L x pi r^2 for an environment, r the scene's bounding radius)."""
-        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
-        disk = np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
+        light and pi L x pi r^2 for an environment, r the scene's bounding radius;
+        environments' are set by :meth:`_environment_bounds`)."""
+        disk = self._scene_disk()
         out = np.zeros((len(kinds), kern.NLB))
         for j, light in enumerate(self.lights.lights):
             kind = kinds[j]
@@ -497,9 +498,6 @@ class Integrator:
                 out[j, kern.LB_PHI] = 2.0 * np.pi * cone * intensity
             elif kind == kern.DIRECTIONAL:
                 out[j, kern.LB_I] = _luminance(light.irradiance)
-                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
-            else:
-                out[j, kern.LB_I] = np.pi * _mean_radiance(light)
                 out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
         return out
 

@@ -298,6 +298,58 @@ def _spot_falloff(lp, j, c):
     return t * t * (3.0 - 2.0 * t)
 
 
+#: real spherical harmonics of bands 0-2 at unit (x, y, z), and the cosine lobe's band
+#: factors pi, 2 pi / 3, pi / 4 (Ramamoorthi and Hanrahan 2001, "An efficient
+#: representation for irradiance environment maps")
+SH_BANDS = np.array([np.pi] + [2.0 * np.pi / 3.0] * 3 + [np.pi / 4.0] * 5)
+SH_Y00 = 0.5 / math.sqrt(math.pi)
+_SH_Y1 = math.sqrt(3.0 / (4.0 * math.pi))
+_SH_Y2 = math.sqrt(15.0 / (4.0 * math.pi))
+_SH_Y20 = math.sqrt(5.0 / (16.0 * math.pi))
+_SH_Y22 = math.sqrt(15.0 / (16.0 * math.pi))
+
+
+@njit(inline="always")
+def _sh_basis(x, y, z):
+    """The nine real spherical harmonics of bands 0-2 at the unit vector (x, y, z)."""
+    return (SH_Y00, _SH_Y1 * y, _SH_Y1 * z, _SH_Y1 * x, _SH_Y2 * x * y, _SH_Y2 * y * z,
+            _SH_Y20 * (3.0 * z * z - 1.0), _SH_Y2 * x * z, _SH_Y22 * (x * x - y * y))
+
+
+@njit(inline="always")
+def _sh9(x, y, z, c, s):
+    """sum_k c[s, k] Y_k(x, y, z) over the nine harmonics of :func:`_sh_basis`."""
+    b = _sh_basis(x, y, z)
+    return (c[s, 0] * b[0] + c[s, 1] * b[1] + c[s, 2] * b[2] + c[s, 3] * b[3]
+            + c[s, 4] * b[4] + c[s, 5] * b[5] + c[s, 6] * b[6] + c[s, 7] * b[7]
+            + c[s, 8] * b[8])
+
+
+@njit(allocates=True)
+def environment_sh(tb, j, u):
+    """(9,) the irradiance of environment light ``j`` as harmonics of bands 0-2: its
+    luminance projected by the light's own importance samples (``u`` (n, 2) uniforms),
+    times :data:`SH_BANDS`; :func:`_sh9` of them at a normal n is the cosine-weighted
+    radiance over the hemisphere around n, smoothed to three bands."""
+    out = np.zeros(9)
+    n = len(u)
+    for i in range(n):
+        wx, wy, wz, _, l0, l1, l2, pdf, _, _, _, _, _ = sample_light(
+            tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
+            tb.light_faces, tb.light_pdf_area, tb.light_object, tb.obj_flags, tb.emit_light,
+            tb.face_normal, tb.env, tb.env_image, tb.env_p, tb.env_cdf, tb.sky, tb.sky_p,
+            tb.sky_cdf, tb.scalars, j, 0.0, 0.0, 0.0, u[i, 0], u[i, 1])
+        if not pdf > 0.0:
+            continue
+        lum = (0.212671 * l0 + 0.715160 * l1 + 0.072169 * l2) / (pdf * n)
+        b = _sh_basis(wx, wy, wz)
+        for k in range(9):
+            out[k] += lum * b[k]
+    for k in range(9):
+        out[k] *= SH_BANDS[k]
+    return out
+
+
 @njit
 def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny, nz):
     """How much light ``j`` may contribute at p with normal n (n = 0: a point in a
@@ -310,7 +362,9 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
     sphere (0 only where p is behind every triangle of a one-sided emitter, or outside a
     spot's cutoff: where the light gives nothing) times the bounded cosine at the
     receiver (at least COS_FLOOR).  Directional lights: irradiance times that cosine;
-    environments: pi times their mean radiance (4 pi in a medium).
+    environments: their irradiance at the normal from three bands of spherical harmonics
+    (:func:`environment_sh`, kept in ``light_params[j, 0:9]``), at least COS_FLOOR of pi
+    times their mean radiance (4 pi times it in a medium).
 
     ``mode + EVERY_DELTA``: the same, delta lights 0 (each is sampled at every vertex,
     outside the selection)."""
@@ -329,7 +383,9 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
         return 0.0
     surface = nx != 0.0 or ny != 0.0 or nz != 0.0
     if kind == ENVIRONMENT or kind == ENVIRONMENT_MAP or kind == SUN_AND_SKY:
-        return intensity if surface else 4.0 * intensity
+        if not surface:
+            return 4.0 * intensity
+        return max(_sh9(nx, ny, nz, light_params, j), COS_FLOOR * intensity)
     if kind == DIRECTIONAL:
         cos_i = abs(_dot(nx, ny, nz, light_params[j, 3], light_params[j, 4],
                          light_params[j, 5])) if surface else 1.0
