@@ -190,6 +190,46 @@ def _luminance(rgb):
     return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
 
 
+def _merge_bounds(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The bounds (a ``light_bounds`` row) of a node of the light tree over two rows:
+    the sphere enclosing both spheres, the union of their emission cones (pbrt-v4's
+    ``Union(DirectionCone, DirectionCone)``; none if either has none or it covers the
+    sphere), and the sums of intensity, power and count."""
+    out = np.zeros_like(a)
+    ca, cb = a[kern.LB_C:kern.LB_C + 3], b[kern.LB_C:kern.LB_C + 3]
+    ra, rb = a[kern.LB_R], b[kern.LB_R]
+    d = float(np.linalg.norm(cb - ca))
+    if d + rb <= ra:
+        c, r = ca, ra
+    elif d + ra <= rb:
+        c, r = cb, rb
+    else:
+        r = 0.5 * (d + ra + rb)
+        c = ca + (cb - ca) * ((r - ra) / d)
+    out[kern.LB_C:kern.LB_C + 3], out[kern.LB_R] = c, r
+    out[kern.LB_COS] = -1.0
+    if a[kern.LB_COS] > -1.0 and b[kern.LB_COS] > -1.0:
+        xa, xb = a[kern.LB_AXIS:kern.LB_AXIS + 3], b[kern.LB_AXIS:kern.LB_AXIS + 3]
+        ta, tb = np.arccos(np.clip([a[kern.LB_COS], b[kern.LB_COS]], -1.0, 1.0))
+        td = float(np.arccos(np.clip(xa @ xb, -1.0, 1.0)))
+        if td + tb <= ta:
+            axis, to = xa, ta
+        elif td + ta <= tb:
+            axis, to = xb, tb
+        else:
+            to = 0.5 * (ta + td + tb)
+            w = xb - (xa @ xb) * xa  # xa turned toward xb by to - ta
+            norm = float(np.linalg.norm(w))
+            axis = xa if norm < 1e-12 else (np.cos(to - ta) * xa + np.sin(to - ta) * w / norm)
+        if to < np.pi:
+            out[kern.LB_AXIS:kern.LB_AXIS + 3] = axis / np.linalg.norm(axis)
+            out[kern.LB_COS] = np.cos(to)
+    out[kern.LB_I] = a[kern.LB_I] + b[kern.LB_I]
+    out[kern.LB_PHI] = a[kern.LB_PHI] + b[kern.LB_PHI]
+    out[kern.LB_N] = a[kern.LB_N] + b[kern.LB_N]
+    return out
+
+
 class Integrator:
     """A path tracer for one built scene.
 
@@ -426,8 +466,8 @@ class Integrator:
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
             np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
-            pdf_area, self._light_bounds(kinds, emit_light, flags), env, env_image, env_p,
-            env_cdf, sky_params, sky_p, sky_cdf, scalars)
+            pdf_area, *self._light_tree(kinds, self._light_bounds(kinds, emit_light, flags)),
+            env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
         self._environment_bounds(tables)
         return tables, params
 
@@ -445,6 +485,52 @@ class Integrator:
                 e = max(float(c[0]) * kern.SH_Y00, 0.0)
                 tables.light_bounds[j, kern.LB_I] = e
                 tables.light_bounds[j, kern.LB_PHI] = self._scene_disk() * e
+
+    def _light_tree(self, kinds, bounds):
+        """The light tree over the lights that next-event estimation selects and that
+        have a place (area, point and spot lights; delta lights only when they are not
+        sampled at every vertex): ``(bounds with a row per node appended, tree)``, tree
+        row = (parent, child a, child b), -1 for none; the root is row ``len(kinds)``.
+
+        Built top down: the lights' bounding-sphere centres are cut at the median of the
+        axis along which they spread most (pbrt-v4 builds its BVHLightSampler by the
+        surface-area-orientation heuristic; the median cut is simpler and keeps the
+        tree balanced).  A node's bounds merge its children's: the enclosing sphere,
+        the union of their emission cones (none if either has none), the sum of their
+        intensities, powers and counts.  With fewer than two such lights, no tree."""
+        n = len(kinds)
+        tree = np.full((n, 3), -1, dtype=np.int64)
+        finite = (kinds == kern.AREA) | (kinds == kern.POINT) | (kinds == kern.SPOT)
+        delta = (kinds == kern.POINT) | (kinds == kern.SPOT)
+        members = np.flatnonzero(finite & ~(delta if self.every_delta else False))
+        bounds = bounds.copy()
+        bounds[:, kern.LB_N] = 1.0
+        bounds[kinds != kern.AREA, kern.LB_COS] = -1.0
+        if len(members) < 2:
+            return bounds, tree
+        rows, links = [], []
+
+        def build(items: np.ndarray, parent: int) -> int:
+            if len(items) == 1:
+                tree[items[0], 0] = parent
+                return int(items[0])
+            r = n + len(rows)
+            rows.append(None)
+            links.append([parent, -1, -1])
+            c = bounds[items, kern.LB_C:kern.LB_C + 3]
+            order = items[np.argsort(c[:, int(np.argmax(np.ptp(c, axis=0)))], kind="stable")]
+            half = len(order) // 2
+            a, b = build(order[:half], r), build(order[half:], r)
+            links[r - n][1:] = [a, b]
+            rows[r - n] = _merge_bounds(row(a), row(b))
+            return r
+
+        def row(x: int) -> np.ndarray:
+            return bounds[x] if x < n else rows[x - n]
+
+        build(members, -1)
+        return (np.vstack([bounds, np.array(rows)]),
+                np.vstack([tree, np.array(links, dtype=np.int64)]))
 
     def _scene_disk(self) -> float:
         """pi r^2 of the scene's bounding sphere (the cross-section a distant light

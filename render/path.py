@@ -111,10 +111,11 @@ EVERY_DELTA = 4
 #: at most this many delta lights are sampled at every vertex (more: selected)
 MAX_EVERY_DELTA = 4
 #: ``light_bounds`` columns: bounding-sphere centre and radius, emission cone axis and
-#: cos of its half-angle (area lights), intensity (the importance's numerator, see
-#: :func:`_importance`), power (pbrt's ``PowerLightSampler``)
-LB_C, LB_R, LB_AXIS, LB_COS, LB_I, LB_PHI = 0, 3, 4, 7, 8, 9
-NLB = 10
+#: cos of its half-angle (area lights; -1: no cone), intensity (the importance's
+#: numerator, see :func:`_importance`), power (pbrt's ``PowerLightSampler``), and the
+#: number of lights below (1 for a light, more for a node of the light tree)
+LB_C, LB_R, LB_AXIS, LB_COS, LB_I, LB_PHI, LB_N = 0, 3, 4, 7, 8, 9, 10
+NLB = 11
 #: the cosine at the receiver never counts less than this in a light's importance: the
 #: shading normal is not the geometric one, so "perpendicular" is no proof of "black"
 COS_FLOOR = 0.02
@@ -154,7 +155,9 @@ Tables = namedtuple(
         "light_cdf",  # (t,) area cdf within each light
         "light_corners",  # (t, 3, 3) their corners
         "light_pdf_area",  # (l,) 1 / area
-        "light_bounds",  # (l, NLB) what a light can contribute (LB_* columns)
+        "light_bounds",  # (l + nodes, NLB) what a light (or a node of the light tree) can
+        # contribute (LB_* columns)
+        "light_tree",  # (l + nodes, 3) int64 parent, child a, child b (-1: none)
         "env",  # (3,) constant environment radiance
         "env_image",  # (h, w, 3) environment map radiance
         "env_p",  # (h * w,) its texels' probabilities
@@ -390,22 +393,33 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
         cos_i = abs(_dot(nx, ny, nz, light_params[j, 3], light_params[j, 4],
                          light_params[j, 5])) if surface else 1.0
         return intensity * max(cos_i, COS_FLOOR)
-    # from the light's bounding sphere to p
+    if kind == SPOT:  # a point: its falloff exactly
+        wx, wy, wz, ok = _unitize(px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2])
+        falloff = _spot_falloff(light_params, j, _dot(wx, wy, wz, light_params[j, 3],
+                                                      light_params[j, 4], light_params[j, 5]))
+        if not falloff > 0.0:
+            return 0.0
+        return falloff * _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, False)
+    return _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, kind == AREA)
+
+
+@njit
+def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
+    """The contribution bound of :func:`_importance` for row ``j`` of ``lb`` (a light or
+    a node of the light tree): ``intensity`` / d^2 from its bounding sphere, times the
+    emitter's cosine bounded by its emission cone (``cone`` and the row has one) and
+    sphere, times the receiver's cosine bounded the same way."""
     vx, vy, vz = px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2]
     r = lb[j, LB_R]
     d2 = vx * vx + vy * vy + vz * vz
     wx, wy, wz, ok = _unitize(vx, vy, vz)
     inside = d2 <= r * r or not ok
+    surface = nx != 0.0 or ny != 0.0 or nz != 0.0
     # sin and cos of the half-angle the bounding sphere subtends at p
     sin_b = 1.0 if inside else min(r / math.sqrt(d2), 1.0)
     cos_b = math.sqrt(max(1.0 - sin_b * sin_b, 0.0))
     cos_e = 1.0
-    if kind == SPOT:  # a point: its falloff exactly
-        cos_e = _spot_falloff(light_params, j, _dot(wx, wy, wz, light_params[j, 3],
-                                                    light_params[j, 4], light_params[j, 5]))
-        if not cos_e > 0.0:
-            return 0.0
-    elif kind == AREA and not inside and lb[j, LB_COS] > -1.0:
+    if cone and not inside and lb[j, LB_COS] > -1.0:
         # cos theta', theta' = max(0, theta_w - theta_o - theta_b): 0 (p behind) below
         # -1e-6, a margin for rounding
         cw = min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1], lb[j, LB_AXIS + 2]),
@@ -431,40 +445,105 @@ def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx,
 
 
 @njit
-def select_light(light_kind, light_bounds, light_params, mode, px, py, pz, nx, ny, nz, u):
+def _node_importance(lb, mode, r, px, py, pz, nx, ny, nz):
+    """:func:`_importance` for node ``r`` of the light tree (a row of ``lb`` after the
+    lights'): the number of its lights, their power, or the bound of their merged
+    bounding sphere and emission cone on the sum of their intensities (pbrt-v4's
+    ``LightBounds`` of a ``BVHLightSampler`` node)."""
+    if mode >= EVERY_DELTA:
+        mode -= EVERY_DELTA
+    if mode == UNIFORM:
+        return lb[r, LB_N]
+    if mode == POWER:
+        return min(lb[r, LB_PHI], MAX_IMPORTANCE)
+    if not lb[r, LB_I] > 0.0:
+        return 0.0
+    return _bound_importance(lb, r, lb[r, LB_I], px, py, pz, nx, ny, nz, True)
+
+
+@njit(inline="always")
+def _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny, nz):
+    """The importance of light ``x``, or of node ``x`` of the light tree (x >= lights)."""
+    if x < len(light_kind):
+        return _importance(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx,
+                           ny, nz)
+    return _node_importance(light_bounds, mode, x, px, py, pz, nx, ny, nz)
+
+
+@njit
+def select_light(light_kind, light_bounds, light_params, light_tree, mode, px, py, pz, nx, ny,
+                 nz, u):
     """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
-    to :func:`_importance`: (light, its probability, the total importance), light -1
-    (probability 0) where no light can contribute.  One pass over the lights, last to
-    first (a reservoir of one, the uniform ``u`` rescaled at each light: with two lights
-    ``u < p_0`` picks the first)."""
+    to :func:`_importance`: (light, its probability, the total importance at the top),
+    light -1 (probability 0) where no light can contribute.
+
+    The top is every light outside the light tree (environments, directional lights,
+    a lone area light) and the tree's root (row ``lights`` of ``light_bounds``, if the
+    scene has one): one pass over them, last to first (a reservoir of one, the uniform
+    ``u`` rescaled at each: with two lights ``u < p_0`` picks the first).  From the
+    root the walk goes down ``light_tree`` (parent, child a, child b per row), picking
+    a child in proportion to its importance, as pbrt-v4's ``BVHLightSampler`` does:
+    O(log lights) per vertex."""
+    n_lights = len(light_kind)
+    top = n_lights + 1 if light_bounds.shape[0] > n_lights else n_lights
     total = 0.0
     chosen, w = -1, 0.0
-    for j in range(len(light_kind) - 1, -1, -1):  # keep j with probability w_j / total so far
-        wj = _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny,
-                         nz)
-        if not wj > 0.0:
+    for x in range(top - 1, -1, -1):  # keep x with probability w_x / total so far
+        if x < n_lights and light_tree[x, 0] >= 0:
+            continue  # under the root
+        wx = _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny, nz)
+        if not wx > 0.0:
             continue
-        total += wj
-        q = wj / total
+        total += wx
+        q = wx / total
         if u < q:
-            chosen, w = j, wj
+            chosen, w = x, wx
             u = min(u / q, ONE_MINUS_EPS)
         else:
             u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
     if not (total > 0.0 and total < np.inf):
         return -1, 0.0, 0.0
-    return chosen, w / total, total
+    pr = w / total
+    x = chosen
+    while x >= n_lights:  # down the tree
+        a, b = light_tree[x, 1], light_tree[x, 2]
+        wa = _weight(light_kind, light_bounds, light_params, mode, a, px, py, pz, nx, ny, nz)
+        wb = _weight(light_kind, light_bounds, light_params, mode, b, px, py, pz, nx, ny, nz)
+        s = wa + wb
+        if not (s > 0.0 and s < np.inf):
+            return -1, 0.0, total
+        q = wa / s
+        if u < q:
+            x, pr = a, pr * q
+            u = min(u / q, ONE_MINUS_EPS)
+        else:
+            x, pr = b, pr * (wb / s)
+            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
+    return x, pr, total
 
 
 @njit
-def selection_pdf(light_kind, light_bounds, light_params, mode, j, total, px, py, pz, nx, ny,
-                  nz):
-    """The probability that :func:`select_light` at p (normal n), whose importances sum
-    to ``total``, picks light ``j`` (0 for ``j < 0``)."""
+def selection_pdf(light_kind, light_bounds, light_params, light_tree, mode, j, total, px, py,
+                  pz, nx, ny, nz):
+    """The probability that :func:`select_light` at p (normal n), whose top importances
+    sum to ``total``, picks light ``j`` (0 for ``j < 0``): up the tree from ``j``, the
+    product of each step's share, times the top's share."""
     if j < 0 or not total > 0.0:
         return 0.0
-    return _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny,
-                       nz) / total
+    pr = 1.0
+    x = j
+    parent = light_tree[x, 0]
+    while parent >= 0:
+        a, b = light_tree[parent, 1], light_tree[parent, 2]
+        wa = _weight(light_kind, light_bounds, light_params, mode, a, px, py, pz, nx, ny, nz)
+        wb = _weight(light_kind, light_bounds, light_params, mode, b, px, py, pz, nx, ny, nz)
+        s = wa + wb
+        if not s > 0.0:
+            return 0.0
+        pr *= (wa if x == a else wb) / s
+        x, parent = parent, light_tree[parent, 0]
+    return pr * _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny,
+                        nz) / total
 
 
 @njit
@@ -578,8 +657,8 @@ def sample_lights(tb, p, u):
     delta, face = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.int64)
     mode = int(tb.scalars[SC_SELECT])
     for i in range(n):
-        j, sel, _ = select_light(tb.light_kind, tb.light_bounds, tb.light_params, mode,
-                                 p[i, 0], p[i, 1], p[i, 2], 0.0, 0.0, 0.0, u[i, 0])
+        j, sel, _ = select_light(tb.light_kind, tb.light_bounds, tb.light_params, tb.light_tree,
+                                 mode, p[i, 0], p[i, 1], p[i, 2], 0.0, 0.0, 0.0, u[i, 0])
         (wi[i, 0], wi[i, 1], wi[i, 2], dist[i], li[i, 0], li[i, 1], li[i, 2], pdf[i], delta[i],
          face[i], _, _, _) = sample_light(
             tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
@@ -598,13 +677,13 @@ def selection(tb, p, nrm):
     out = np.zeros((n, n_lights))
     mode = int(tb.scalars[SC_SELECT])
     for i in range(n):
-        _, _, total = select_light(tb.light_kind, tb.light_bounds, tb.light_params, mode,
-                                   p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1], nrm[i, 2],
-                                   0.5)
+        _, _, total = select_light(tb.light_kind, tb.light_bounds, tb.light_params, tb.light_tree,
+                                   mode, p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1],
+                                   nrm[i, 2], 0.5)
         for j in range(n_lights):
-            out[i, j] = selection_pdf(tb.light_kind, tb.light_bounds, tb.light_params, mode, j,
-                                      total, p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1],
-                                      nrm[i, 2])
+            out[i, j] = selection_pdf(tb.light_kind, tb.light_bounds, tb.light_params,
+                                      tb.light_tree, mode, j, total, p[i, 0], p[i, 1], p[i, 2],
+                                      nrm[i, 0], nrm[i, 1], nrm[i, 2])
     return out
 
 
@@ -810,7 +889,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     # arrays out of the tuple once: each access costs numba two atomic reference counts
     object_light, emit_hit, face_normal = tb.object_light, tb.emit_hit, tb.face_normal
-    light_bounds = tb.light_bounds
+    light_bounds, light_tree = tb.light_bounds, tb.light_tree
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
     medium, phase = tb.medium, tb.phase
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
@@ -866,8 +945,9 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             total, jd = 0.0, -1
             for pick in range(1 + n_every):  # the selected light, then every delta light
                 if pick == 0:
-                    j, sel, total = select_light(light_kind, light_bounds, light_params, mode,
-                                                 px, py, pz, 0.0, 0.0, 0.0, u[i, 2])  # -1: none
+                    j, sel, total = select_light(light_kind, light_bounds, light_params,
+                                                 light_tree, mode, px, py, pz, 0.0, 0.0, 0.0,
+                                                 u[i, 2])  # -1: none
                 else:
                     jd = _next_delta(light_kind, jd)
                     j, sel = jd, 1.0
@@ -912,8 +992,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
             if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
                 if not prev_delta:
-                    pe *= selection_pdf(light_kind, light_bounds, light_params, mode, env_light,
-                                        prev_sum, vx, vy, vz, vnx, vny, vnz)
+                    pe *= selection_pdf(light_kind, light_bounds, light_params, light_tree, mode,
+                                        env_light, prev_sum, vx, vy, vz, vnx, vny, vnz)
                 w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
                 L[lane, 0] += b0 * e0 * w
                 L[lane, 1] += b1 * e1 * w
@@ -967,8 +1047,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             cos_l = abs(g_wo)
             if not prev_delta and jl >= 0 and cos_l > 0.0:
                 pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(
-                    light_kind, light_bounds, light_params, mode, jl, prev_sum, vx, vy, vz,
-                    vnx, vny, vnz)
+                    light_kind, light_bounds, light_params, light_tree, mode, jl, prev_sum, vx,
+                    vy, vz, vnx, vny, vnz)
                 w = _power(prev_pdf, pl) / mis
             L[lane, 0] += b0 * e0 * w
             L[lane, 1] += b1 * e1 * w
@@ -1002,8 +1082,8 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
         jd = -1
         for pick in range(1 + n_every if can_continue else 0):  # selected, then every delta
             if pick == 0:
-                j, sel, total = select_light(light_kind, light_bounds, light_params, mode, px,
-                                             py, pz, nx, ny, nz, u[i, 2])
+                j, sel, total = select_light(light_kind, light_bounds, light_params, light_tree,
+                                             mode, px, py, pz, nx, ny, nz, u[i, 2])
             else:
                 jd = _next_delta(light_kind, jd)
                 j, sel = jd, 1.0
