@@ -19,7 +19,10 @@ the ratios, not the absolute times).
 * **sky and lamps**: the molding under a low sun and sky and 8 of the frieze's lamps,
   equal-time RMSE against a reference 10x as long (the environment's importance at a
   vertex follows the normal: compare with the tree before that change in the same run,
-  ``--only sky``).
+  ``--only sky``);
+* **tube**: the molding under a 12-unit emissive cylinder (4096 triangles) and a dim
+  sky, equal-time RMSE (an emitter of many triangles in groups, or, in the tree before,
+  one light: ``--only tube`` in each).
 """
 
 from __future__ import annotations
@@ -159,6 +162,28 @@ def sky_and_lamps(args):
           f"mean {reference.mean():.4f}")
 
 
+def tube(args):
+    """The molding under a 12-unit neon tube (an emissive cylinder of 4096 triangles)
+    and a dim sky: equal-time RMSE against a reference 10x as long.  Compare trees (the
+    tube as one light, or in groups) in the same run with ``--only tube``."""
+    w, h = args.size
+    lamp = SceneObject(Cylinder(0.03, 12.0), emissive_material((np.pi * 20.0,) * 3),
+                       make_transform(translate=(0.0, 1.0, 0.3), rotate=(0.0, 0.0, 90.0)),
+                       name="tube", resolution=(256, 8))
+    scene = molding_scene(w, h, [ConstantEnvironment(0.05)], [lamp], "contribution")
+    integ = Integrator(scene, scene.build())
+    integ.render(spp=1, progress=False)  # warm-up
+    reference = integ.render(time_budget=10 * args.seconds, seed=100, progress=False,
+                             threads=THREADS).rgb()
+    film = integ.render(time_budget=args.seconds, seed=1, progress=False, threads=THREADS)
+    rmse = float(np.sqrt(np.mean((film.rgb() - reference) ** 2)))
+    rmse *= np.sqrt(film.stats["time_s"] / args.seconds)
+    t, spp = film.stats["time_s"], film.stats["spp"]
+    print(f"tube contribution, {len(integ.lights)} lights: {spp} spp in {t:.1f} s "
+          f"({t / (w * h * spp) * 1e9:.0f} ns per sample), equal-time RMSE {rmse:.5f} "
+          f"(reference {10 * args.seconds} s), mean {reference.mean():.4f}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
@@ -168,7 +193,8 @@ def main(argv=None) -> int:
     ap.add_argument("--lights", type=int, default=100, help="frieze area lights")
     ap.add_argument("--sun-size", type=int, nargs=2, default=(512, 384), metavar=("W", "H"))
     ap.add_argument("--spp", type=int, default=16, help="sun-and-sky samples per pixel")
-    ap.add_argument("--only", choices=("frieze", "sun", "sky"), help="one of the scenes")
+    ap.add_argument("--only", choices=("frieze", "sun", "sky", "tube"),
+                    help="one of the scenes")
     args = ap.parse_args(argv)
     if args.quick:
         args.size, args.seconds, args.sun_size, args.spp = (48, 32), 0.5, (64, 48), 4
@@ -178,6 +204,8 @@ def main(argv=None) -> int:
         sun_and_sky(args)
     if args.only in (None, "sky"):
         sky_and_lamps(args)
+    if args.only in (None, "tube"):
+        tube(args)
     return 0
 
 

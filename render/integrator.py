@@ -253,13 +253,17 @@ class Integrator:
         # scene-relative, plus the float32 rounding of the largest coordinate
         self.eps = RAY_EPS * geometry.extent + 4e-7 * float(np.abs(geometry.vertices).max())
         lights = list(scene.lights)
+        #: each emissive object's triangles as one light (its emission and total area);
+        #: next-event estimation samples them in groups (AreaLight.groups)
+        self.emitters = {}
         for k, obj in enumerate(self.objects):
             if _is_emissive(obj.material):
                 first, last = geometry.face_offset[k], geometry.face_offset[k + 1]
                 faces = np.arange(first, last)
                 corners = geometry.vertices[geometry.faces[faces]]
-                lights.append(AreaLight(k, faces, corners, geometry.face_normal[faces],
-                                        self._emission_fn(k)))
+                self.emitters[k] = AreaLight(k, faces, corners, geometry.face_normal[faces],
+                                             self._emission_fn(k))
+                lights.extend(self.emitters[k].groups())
         self.lights = LightSet(lights)
         n_delta = sum(light.delta for light in self.lights.lights)
         #: delta lights sampled at every vertex besides the selected light (their shadow
@@ -379,7 +383,7 @@ class Integrator:
                 intensity = np.broadcast_to(
                     np.asarray(mat.surface.emission.intensity, dtype=np.float64), (3,))
                 radiance, power = const_emit[k]
-                light = self.lights.area_by_object[k]
+                light = self.emitters[k]
                 # edf.eval (1/pi) times the intensity (per area in power mode) on a hit,
                 # intensity / pi (per area) when sampled
                 emit_hit[k] = (intensity / light.area if power else intensity) / np.pi
@@ -439,8 +443,10 @@ class Integrator:
                                         + (kern.EVERY_DELTA if self.every_delta else 0))
         env_index = [j for j, light in enumerate(lights) if light.infinite]
         scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
-        object_light = np.full(n_obj, -1, dtype=np.int64)
-        object_light[light_object[light_object >= 0]] = np.flatnonzero(light_object >= 0)
+        face_light = np.full(len(self.geo.faces), -1, dtype=np.int64)
+        for j, light in enumerate(lights):
+            if kinds[j] == kern.AREA:
+                face_light[light.faces] = j
         scalars[kern.SC_EPS] = self.eps
         scalars[kern.SC_MAX_DEPTH] = float(self.max_depth)
         scalars[kern.SC_RR_DEPTH] = float(self.settings.rr_depth)
@@ -461,7 +467,7 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit, emit_light,
-            object_light, media, phase,
+            face_light, media, phase,
             kinds, light_object, light_params, light_first,
             np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
             np.concatenate(cdf) if cdf else np.zeros(0),
@@ -650,7 +656,7 @@ class Integrator:
         intensity = np.broadcast_to(np.asarray(sh.intensity, dtype=np.float64),
                                     (len(wo_world), 3))
         if "power" in str(sh.mode):
-            light = self.lights.area_by_object.get(k)
+            light = self.emitters.get(k)
             intensity = intensity / (light.area if light is not None else 1.0)
         wo = frame.to_local(wo_world)
         if self.two_faced[k]:
@@ -826,7 +832,7 @@ class Integrator:
             objs = self.geo.face_object[f]
             for k in np.unique(objs):
                 sel = deferred[objs == k]
-                le = self.lights.area_by_object[k].emission(
+                le = self.emitters[k].emission(
                     si[sel, kern.S_FACE], sf[sel, kern.S_BARY:kern.S_BARY + 3],
                     -sf[sel, kern.S_D:kern.S_D + 3])
                 sf[sel, kern.S_C:kern.S_C + 3] *= le

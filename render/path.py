@@ -144,7 +144,7 @@ Tables = namedtuple(
         "obj_medium",  # (k,) int64 medium of the inside, -1: none
         "emit_hit",  # (k, 3) radiance seen on the front of a constant diffuse emitter
         "emit_light",  # (k, 3) radiance of its light samples
-        "object_light",  # (k,) int64 the area light of each object, -1: none
+        "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
         "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
         "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
         "light_kind",  # (l,) int64
@@ -888,7 +888,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
     n_const = 2 * len(tb.obj_flags)
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     # arrays out of the tuple once: each access costs numba two atomic reference counts
-    object_light, emit_hit, face_normal = tb.object_light, tb.emit_hit, tb.face_normal
+    face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
     light_bounds, light_tree = tb.light_bounds, tb.light_tree
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
     medium, phase = tb.medium, tb.phase
@@ -1043,7 +1043,7 @@ def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf,
             e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
         if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
             w = 1.0 / mis
-            jl = object_light[k]
+            jl = face_light[f]
             cos_l = abs(g_wo)
             if not prev_delta and jl >= 0 and cos_l > 0.0:
                 pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(

@@ -310,3 +310,45 @@ def test_the_tree_holds_every_area_light_once():
         assert lb[x, K.LB_N] == lb[a, K.LB_N] + lb[b, K.LB_N]
         stack += [a, b]
     assert sorted(seen) == list(range(1, n))
+
+
+# ---------------------------------------------------------------- emitter groups
+def _tube(length=12.0, radius=0.03, height=1.0):
+    """An emissive cylinder along x (a neon tube) of 256 x 8 quads."""
+    from displacement.surfaces import Cylinder
+
+    return SceneObject(Cylinder(radius, length), emissive_material((np.pi * 20.0,) * 3),
+                       make_transform(translate=(0.0, height, 0.0),
+                                      rotate=(0.0, 0.0, 90.0)),
+                       resolution=(256, 8))
+
+
+def test_an_emitter_of_many_triangles_is_sampled_in_groups():
+    """The tube's triangles become 32 lights that partition them (each triangle in the
+    group ``face_light`` names, areas summing to the tube's), and from a point near
+    one end the nearest group is the likeliest."""
+    from render.lights import GROUP_FACES, GROUPS
+
+    tb = light_tables([], [_tube()], selection="contribution")
+    n = len(tb.light_kind)
+    assert n == GROUPS
+    tube = np.flatnonzero(tb.face_object == 0)
+    groups = tb.face_light[tube]
+    assert np.all(groups >= 0) and sorted(np.unique(groups)) == list(range(n))
+    for j in range(n):
+        faces = tb.light_faces[tb.light_first[j]:tb.light_first[j + 1]]
+        assert len(faces) >= GROUP_FACES and np.all(tb.face_light[faces] == j)
+    c = tb.light_corners
+    area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
+    assert np.sum(1.0 / tb.light_pdf_area) == pytest.approx(area, rel=1e-12)
+    p = np.array([[-5.5, 0.0, 0.0]])
+    pr = selection(tb, p, np.array([[0.0, 1.0, 0.0]]))[0]
+    centre = tb.light_bounds[:n, 0]  # the lights (the tree's nodes follow)
+    assert abs(centre[np.argmax(pr)] + 5.5) < 1.5  # the tube is cut into 1.5 lengths
+    assert np.all(pr[centre > 3.0] < pr.max() / 20)
+    assert pr.sum() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_a_small_emitter_stays_one_light():
+    tb = light_tables([], [_quad(0.0)], selection="contribution")
+    assert len(tb.light_kind) == 1
