@@ -508,7 +508,7 @@ class Integrator:
         tree = np.full((n, 3), -1, dtype=np.int64)
         finite = (kinds == kern.AREA) | (kinds == kern.POINT) | (kinds == kern.SPOT)
         delta = (kinds == kern.POINT) | (kinds == kern.SPOT)
-        members = np.flatnonzero(finite & ~(delta if self.every_delta else False))
+        members = np.flatnonzero(finite & ~delta if self.every_delta else finite)
         bounds = bounds.copy()
         bounds[:, kern.LB_N] = 1.0
         bounds[kinds != kern.AREA, kern.LB_COS] = -1.0
