@@ -84,23 +84,29 @@ def frieze_lights(n=100):
                         name=f"lamp{i}") for i, x in enumerate(xs)]
 
 
+def equal_time(scene, seconds, reference=None):
+    """Render ``scene`` for ``seconds`` (after a warm-up): ``(integrator, film, RMSE
+    against reference, reference)``, the reference rendered for 10x the time when not
+    given.  Passes are whole: the RMSE is scaled to exactly the budget (error ~
+    1 / sqrt(time))."""
+    integ = Integrator(scene, scene.build())
+    integ.render(spp=1, progress=False)  # warm-up
+    if reference is None:
+        reference = integ.render(time_budget=10 * seconds, seed=100, progress=False,
+                                 threads=THREADS).rgb()
+    film = integ.render(time_budget=seconds, seed=1, progress=False, threads=THREADS)
+    rmse = float(np.sqrt(np.mean((film.rgb() - reference) ** 2)))
+    return integ, film, rmse * np.sqrt(film.stats["time_s"] / seconds), reference
+
+
 def frieze(args):
     w, h = args.size
-    reference = None
     rows = []
     lamps = frieze_lights(args.lights)
-    for sel in ("contribution", *SELECTIONS):
-        scene = molding_scene(w, h, [], lamps, sel)
-        integ = Integrator(scene, scene.build())
-        integ.render(spp=1, progress=False)  # warm-up
-        if reference is None:
-            reference = integ.render(time_budget=10 * args.seconds, seed=100, progress=False,
-                                     threads=THREADS).rgb()
-            continue
-        film = integ.render(time_budget=args.seconds, seed=1, progress=False, threads=THREADS)
-        rmse = float(np.sqrt(np.mean((film.rgb() - reference) ** 2)))
-        # passes are whole: scale to exactly the budget (error ~ 1 / sqrt(time))
-        rmse *= np.sqrt(film.stats["time_s"] / args.seconds)
+    *_, reference = equal_time(molding_scene(w, h, [], lamps, "contribution"), args.seconds)
+    for sel in SELECTIONS:
+        _, film, rmse, _ = equal_time(molding_scene(w, h, [], lamps, sel), args.seconds,
+                                      reference)
         rows.append((sel, film.stats["spp"], film.stats["time_s"], rmse))
     base = rows[0][3]
     print(f"# frieze: {args.lights} area lights, {w}x{h}, equal time {args.seconds} s, "
@@ -148,14 +154,8 @@ def sky_and_lamps(args):
 
     w, h = args.size
     sky = SunAndSky(sun_direction_from_angles(20.0, 200.0), turbidity=3.0, intensity=0.5)
-    scene = molding_scene(w, h, [sky], frieze_lights(8), "contribution")
-    integ = Integrator(scene, scene.build())
-    integ.render(spp=1, progress=False)  # warm-up
-    reference = integ.render(time_budget=10 * args.seconds, seed=100, progress=False,
-                             threads=THREADS).rgb()
-    film = integ.render(time_budget=args.seconds, seed=1, progress=False, threads=THREADS)
-    rmse = float(np.sqrt(np.mean((film.rgb() - reference) ** 2)))
-    rmse *= np.sqrt(film.stats["time_s"] / args.seconds)
+    _, film, rmse, reference = equal_time(
+        molding_scene(w, h, [sky], frieze_lights(8), "contribution"), args.seconds)
     t, spp = film.stats["time_s"], film.stats["spp"]
     print(f"sky+lamps contribution: {spp} spp in {t:.1f} s ({t / (w * h * spp) * 1e9:.0f} ns "
           f"per sample), equal-time RMSE {rmse:.5f} (reference {10 * args.seconds} s), "
@@ -170,14 +170,8 @@ def tube(args):
     lamp = SceneObject(Cylinder(0.03, 12.0), emissive_material((np.pi * 20.0,) * 3),
                        make_transform(translate=(0.0, 1.0, 0.3), rotate=(0.0, 0.0, 90.0)),
                        name="tube", resolution=(256, 8))
-    scene = molding_scene(w, h, [ConstantEnvironment(0.05)], [lamp], "contribution")
-    integ = Integrator(scene, scene.build())
-    integ.render(spp=1, progress=False)  # warm-up
-    reference = integ.render(time_budget=10 * args.seconds, seed=100, progress=False,
-                             threads=THREADS).rgb()
-    film = integ.render(time_budget=args.seconds, seed=1, progress=False, threads=THREADS)
-    rmse = float(np.sqrt(np.mean((film.rgb() - reference) ** 2)))
-    rmse *= np.sqrt(film.stats["time_s"] / args.seconds)
+    integ, film, rmse, reference = equal_time(
+        molding_scene(w, h, [ConstantEnvironment(0.05)], [lamp], "contribution"), args.seconds)
     t, spp = film.stats["time_s"], film.stats["spp"]
     print(f"tube contribution, {len(integ.lights)} lights: {spp} spp in {t:.1f} s "
           f"({t / (w * h * spp) * 1e9:.0f} ns per sample), equal-time RMSE {rmse:.5f} "

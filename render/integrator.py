@@ -190,6 +190,18 @@ def _luminance(rgb):
     return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
 
 
+def _union(d: float, ra: float, rb: float) -> tuple[float, float]:
+    """The smallest ball (or cone) holding balls of radii ``ra`` and ``rb`` whose centres
+    are ``d`` apart (cones: half-angles, and the angle between the axes): its radius,
+    and how far its centre lies from a's toward b's."""
+    if d + rb <= ra:
+        return ra, 0.0
+    if d + ra <= rb:
+        return rb, d
+    r = 0.5 * (d + ra + rb)
+    return r, r - ra
+
+
 def _merge_bounds(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The bounds (a ``light_bounds`` row) of a node of the light tree over two rows:
     the sphere enclosing both spheres, the union of their emission cones (pbrt-v4's
@@ -197,30 +209,18 @@ def _merge_bounds(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     sphere), and the sums of intensity, power and count."""
     out = np.zeros_like(a)
     ca, cb = a[kern.LB_C:kern.LB_C + 3], b[kern.LB_C:kern.LB_C + 3]
-    ra, rb = a[kern.LB_R], b[kern.LB_R]
     d = float(np.linalg.norm(cb - ca))
-    if d + rb <= ra:
-        c, r = ca, ra
-    elif d + ra <= rb:
-        c, r = cb, rb
-    else:
-        r = 0.5 * (d + ra + rb)
-        c = ca + (cb - ca) * ((r - ra) / d)
-    out[kern.LB_C:kern.LB_C + 3], out[kern.LB_R] = c, r
+    r, shift = _union(d, a[kern.LB_R], b[kern.LB_R])
+    out[kern.LB_C:kern.LB_C + 3] = ca + (cb - ca) * (shift / d) if shift > 0.0 else ca
+    out[kern.LB_R] = r
     out[kern.LB_COS] = -1.0
     if a[kern.LB_COS] > -1.0 and b[kern.LB_COS] > -1.0:
         xa, xb = a[kern.LB_AXIS:kern.LB_AXIS + 3], b[kern.LB_AXIS:kern.LB_AXIS + 3]
         ta, tb = np.arccos(np.clip([a[kern.LB_COS], b[kern.LB_COS]], -1.0, 1.0))
-        td = float(np.arccos(np.clip(xa @ xb, -1.0, 1.0)))
-        if td + tb <= ta:
-            axis, to = xa, ta
-        elif td + ta <= tb:
-            axis, to = xb, tb
-        else:
-            to = 0.5 * (ta + td + tb)
-            w = xb - (xa @ xb) * xa  # xa turned toward xb by to - ta
-            norm = float(np.linalg.norm(w))
-            axis = xa if norm < 1e-12 else (np.cos(to - ta) * xa + np.sin(to - ta) * w / norm)
+        to, turn = _union(float(np.arccos(np.clip(xa @ xb, -1.0, 1.0))), ta, tb)
+        w = xb - (xa @ xb) * xa  # xa turned toward xb by ``turn``
+        norm = float(np.linalg.norm(w))
+        axis = xa if norm < 1e-12 else np.cos(turn) * xa + np.sin(turn) * w / norm
         if to < np.pi:
             out[kern.LB_AXIS:kern.LB_AXIS + 3] = axis / np.linalg.norm(axis)
             out[kern.LB_COS] = np.cos(to)

@@ -46,6 +46,7 @@ from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
 from render.df.anisotropic_vdf import sample as _phase_sample
 from render.jit import njit
 from render.lights import INFINITE_DISTANCE
+from render.program import LUM_B, LUM_G, LUM_R
 from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
 from render.volume import (
     free_flight,
@@ -344,7 +345,7 @@ def environment_sh(tb, j, u):
             tb.sky_cdf, tb.scalars, j, 0.0, 0.0, 0.0, u[i, 0], u[i, 1])
         if not pdf > 0.0:
             continue
-        lum = (0.212671 * l0 + 0.715160 * l1 + 0.072169 * l2) / (pdf * n)
+        lum = (LUM_R * l0 + LUM_G * l1 + LUM_B * l2) / (pdf * n)
         b = _sh_basis(wx, wy, wz)
         for k in range(9):
             out[k] += lum * b[k]
