@@ -71,15 +71,20 @@ Examples
 from __future__ import annotations
 
 import ctypes
+import functools
 import glob
 import threading
+import time
 from collections import namedtuple
 from collections.abc import Sequence
 from pathlib import Path
 
 import llvmlite.binding as llvm
+import llvmlite.ir as llvm_ir
 import numpy as np
 from numba import prange, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from render.jit import njit
 
@@ -93,6 +98,8 @@ __all__ = [
     "new_scratch",
     "intersect1",
     "occluded1",
+    "cycles",
+    "cycle_rate",
     "intersect_rays",
     "occluded_rays",
     "PACKET_SCRATCH_SIZE",
@@ -439,6 +446,37 @@ def occluded1(scene, ox, oy, oz, dx, dy, dz, tnear, tfar, scratch):
     _set_ray(scratch, ox, oy, oz, dx, dy, dz, tnear, tfar)
     _rtc_occluded1(scene, scratch.ctypes.data, 0)
     return scratch[_TFAR] == -np.inf
+
+
+@intrinsic
+def _readcyclecounter(typingctx):
+    def codegen(context, builder, signature, args):
+        fnty = llvm_ir.FunctionType(llvm_ir.IntType(64), [])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.readcyclecounter")
+        return builder.call(fn, [])
+
+    return types.uint64(), codegen
+
+
+@njit(inline="always")
+def cycles():
+    """The CPU's time-stamp counter (``rdtsc``, LLVM's ``readcyclecounter``): a clock
+    cheap enough to time single Embree calls from compiled code (a sample of them,
+    :data:`render.path.TIMED_EVERY`); :func:`cycle_rate` converts it to seconds."""
+    return _readcyclecounter()
+
+
+@functools.cache
+def cycle_rate() -> float:
+    """Counts of :func:`cycles` per second, measured once per process against
+    ``time.perf_counter`` over 50 ms (the time-stamp counter of current x86 CPUs runs at
+    a constant rate)."""
+    cycles()  # compiled (or loaded) before the clock starts
+    t0, c0 = time.perf_counter(), cycles()
+    while time.perf_counter() - t0 < 0.05:
+        pass
+    t1, c1 = time.perf_counter(), cycles()
+    return float(c1 - c0) / (t1 - t0)
 
 
 # ------------------------------------------------------------------- packets of 8

@@ -71,9 +71,11 @@ import threading
 import time as _time
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
+from types import SimpleNamespace
 
 import numpy as np
 
+from render import embree
 from render import path as kern
 from render.camera import primary_rays
 from render.df.anisotropic_vdf import SIGNATURE as _PHASE
@@ -91,16 +93,7 @@ from render.lights import (
 from render.numerics import dot
 from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
 from render.program import ProgramTable
-from render.sampler import (
-    CAMERA_PAIR,
-    FIRST_SEGMENT_PAIR,
-    HERO_PAIR,
-    PAIRS_PER_SEGMENT,
-    SAMPLERS,
-    pair_values,
-    segment_values,
-    shadow_values,
-)
+from render.sampler import CAMERA_PAIR, SAMPLERS, SOBOL_TABLE, pair_values
 from render.sky import SunAndSky
 from render.volume import MAX_NESTING, is_closed, medium_of
 
@@ -108,6 +101,10 @@ __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
 
 #: ray-origin offset relative to the scene's bounding-box diagonal
 RAY_EPS = 1e-5
+#: up to this many lights next-event estimation weighs each light at every vertex (as
+#: cheap as walking a tree of them, and each light's own bound is the sharper); more
+#: are put in a light tree
+FLAT_LIGHTS = 8
 _LIGHT_KINDS = {
     ConstantEnvironment: kern.ENVIRONMENT,
     PointLight: kern.POINT,
@@ -322,6 +319,7 @@ class Integrator:
         self.embree_time = 0.0
         self.rays = 0
         self._count_lock = threading.Lock()  # two threads trace chunks at once
+        self._local = threading.local()  # each thread's buffers (:meth:`_buffers`)
         # compile (or load from numba's cache) before worker threads start
         self.trace(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), 0)
 
@@ -369,6 +367,9 @@ class Integrator:
         flags[self.null_candidate] |= kern.NULL
         flags[self.encloses] |= kern.ENCLOSES
         flags[self.two_faced] |= kern.TWO_FACED
+        flags[self.bound] |= kern.BOUND
+        if self.encloses.any():
+            flags[self.ior_sensitive] |= kern.IOR_SENSITIVE
         opacity = np.ones(n_obj)
         ior = np.ones(n_obj)
         for k, obj in enumerate(self.objects):
@@ -454,6 +455,8 @@ class Integrator:
         scalars[kern.SC_ROT_C], scalars[kern.SC_ROT_S] = np.cos(rot), np.sin(rot)
         scalars[kern.SC_MEDIA] = float(bool(self.media))
         scalars[kern.SC_AOV] = float(bool(self.aovs))
+        scalars[kern.SC_BIND] = float(self.may_bind)
+        scalars[kern.SC_PASS] = float(bool(self.passable.any()))
         scalars[kern.SC_CAM:kern.SC_CAM + 3] = self.camera.position
         scalars[kern.SC_FWD:kern.SC_FWD + 3] = self.camera.forward
         table = ProgramTable(self.programs)
@@ -503,7 +506,7 @@ class Integrator:
         surface-area-orientation heuristic; the median cut is simpler and keeps the
         tree balanced).  A node's bounds merge its children's: the enclosing sphere,
         the union of their emission cones (none if either has none), the sum of their
-        intensities, powers and counts.  With fewer than two such lights, no tree."""
+        intensities, powers and counts.  With :data:`FLAT_LIGHTS` or fewer, no tree."""
         n = len(kinds)
         tree = np.full((n, 3), -1, dtype=np.int64)
         finite = (kinds == kern.AREA) | (kinds == kern.POINT) | (kinds == kern.SPOT)
@@ -512,7 +515,7 @@ class Integrator:
         bounds = bounds.copy()
         bounds[:, kern.LB_N] = 1.0
         bounds[kinds != kern.AREA, kern.LB_COS] = -1.0
-        if len(members) < 2:
+        if len(members) <= FLAT_LIGHTS:
             return bounds, tree
         rows, links = [], []
 
@@ -757,6 +760,10 @@ class Integrator:
         """Trace one path per entry of ``pixel``: sample ``index`` of that pixel, its
         sample values from :mod:`render.sampler` (seeded ``seed``).
 
+        One call of :func:`render.path.trace` carries every path to its end; lanes
+        parked at objects shaded with numpy are bound (:meth:`_bind`) and resumed, and
+        parked shadow records finished (:meth:`_shadows`), until none is left.
+
         Returns
         -------
         rgb : (n, 3) float64
@@ -767,46 +774,32 @@ class Integrator:
         kind = SAMPLERS[self.settings.sampler]
         o, d = primary_rays(self.camera, pixel,
                             pair_values(pixel, index, CAMERA_PAIR, seed, kind))
-        lf = np.zeros((n, kern.NF))
-        lf[:, kern.ORG:kern.ORG + 3] = o
-        lf[:, kern.D:kern.D + 3] = d
-        lf[:, kern.BETA:kern.BETA + 3] = 1.0
-        lf[:, kern.R:kern.R + 3] = 1.0
-        li = np.zeros((n, kern.NI), dtype=np.int64)
-        li[:, kern.ID] = np.arange(n)
-        li[:, kern.DEPTH] = 1
-        li[:, kern.DELTA] = 1  # camera rays count as specular (no MIS)
-        li[:, kern.FIRST] = 1
-        if self.media:  # one hero channel per path, drawn only in scenes with media
-            hero = pair_values(pixel, index, HERO_PAIR, seed, kind)[:, 0]
-            li[:, kern.HERO] = np.minimum((hero * 3).astype(np.int64), 2)
-        so = np.full((n, self.nesting), -1, dtype=np.int64)
-        sior = np.ones((n, self.nesting))
         L = np.zeros((n, 3))
         alpha = np.zeros(n)
         aov = np.zeros((n if self.aovs else 1, kern.NA))
         aov[:, kern.A_OBJECT] = -1
-        # buffers reused from segment to segment (fresh ones would cost page faults):
-        # lane state in and out, shadow records in and out, hits and random numbers
-        nxt = (np.empty_like(lf), np.empty_like(li), np.empty_like(so), np.empty_like(sior))
-        shadow = self._shadow_buffers(n * self.shadow_rows)
-        face = np.empty(n, dtype=np.int64)
-        b1, b2, t = np.zeros(n), np.zeros(n), np.zeros(n)
-        u = np.empty((n, 9))
-        segment = 0
-        while n:
-            t0 = _time.perf_counter()
-            kern.intersect(self.scene_handle, self.tables, lf, n, face, b1, b2, t)
-            self._count(n, _time.perf_counter() - t0)
-            pairs = FIRST_SEGMENT_PAIR + segment * PAIRS_PER_SEGMENT
-            segment_values(u, n, li[:, kern.ID], pixel, index, pairs, seed, kind)
+        buf = self._buffers(n)
+        lanes, parked = buf.lanes
+        counts = np.zeros(3, dtype=np.uint64)
+        tables, params = self.tables, self.params
+        lane_row, bf, bslot = np.full(1, -1, dtype=np.int64), np.zeros((1, 11)), np.zeros(1, np.int64)
+        m, resume = n, False
+        while True:
+            m, ns = kern.trace(self.scene_handle, tables, m, resume, o, d, pixel, index, seed,
+                               kind, SOBOL_TABLE, *lanes, lane_row, params, bf, bslot, L, alpha,
+                               aov, *parked, *buf.shadows[0], kern.scratch(tables), buf.es,
+                               buf.cso, buf.csior, counts)
+            if ns:
+                self._shadows(ns, buf, (pixel, index, seed, kind), L, counts)
+            if not m:
+                break
+            lanes, parked = parked, lanes
+            lf, li, so, sior = lanes
             tables, params, lane_row, bf, bslot = self._bind(
-                face[:n], b1[:n], b2[:n], lf[:n, kern.D:kern.D + 3], so, sior, li[:n, kern.NSTK])
-            n, ns = kern.bounce(tables, n, face, b1, b2, t, lf, li, so, sior, u, lane_row, params,
-                                bf, bslot, L, alpha, aov, *nxt, *shadow[0], kern.scratch(tables))
-            self._shadows(ns, shadow, (pixel, index, seed, segment, kind), L)
-            (lf, li, so, sior), nxt = nxt, (lf, li, so, sior)
-            segment += 1
+                li[:m, kern.HIT], lf[:m, kern.HIT_B1], lf[:m, kern.HIT_B2],
+                lf[:m, kern.D:kern.D + 3], so, sior, li[:m, kern.NSTK])
+            resume = True
+        self._count(counts)
         aovs = {}
         if self.aovs:
             a = {"albedo": aov[:, 0:3], "normal": aov[:, 3:6], "depth": aov[:, 6],
@@ -814,50 +807,68 @@ class Integrator:
             aovs = {name: np.ascontiguousarray(a[name]) for name in self.aovs}
         return L, alpha, aovs
 
-    def _shadow_buffers(self, n: int):
-        """Two sets of shadow-record arrays for ``n`` records (read one, write the other)."""
-        return [(np.empty((n, kern.NSF)), np.empty((n, kern.NSI), dtype=np.int64),
-                 np.empty((n, self.nesting), dtype=np.int64), np.empty((n, self.nesting)))
-                for _ in range(2)]
+    def _buffers(self, n: int):
+        """This thread's arrays for a chunk of ``n`` lanes, reused from chunk to chunk
+        (fresh ones would cost page faults): two sets of parked-lane arrays (read one,
+        write the other) and two of shadow records, with room for every lane where
+        lanes may park (else one row: nothing parks), and Embree's ray record and a
+        lane's stack of closed objects."""
+        buf = getattr(self._local, "buffers", None)
+        if buf is None or buf.n < n:
+            rows = n if self.may_bind else 1
+            srows = rows * self.shadow_rows
+            nest = self.nesting
 
-    def _shadows(self, ns, buffers, sample, L):
-        """Trace the ``ns`` shadow records in ``buffers[0]`` to their lights (through
-        cutouts and null surfaces), adding what arrives to ``L``; ``sample`` is the
-        segment's ``(pixel, index, seed, segment, sampler kind)`` (the cutouts' sample
-        values)."""
-        sf, si = buffers[0][0], buffers[0][1]
-        deferred = np.flatnonzero(si[:ns, kern.S_FACE] >= 0)
-        if len(deferred):  # area lights whose radiance varies: evaluate it now
-            f = si[deferred, kern.S_FACE]
-            objs = self.geo.face_object[f]
-            for k in np.unique(objs):
-                sel = deferred[objs == k]
-                le = self.emitters[k].emission(
-                    si[sel, kern.S_FACE], sf[sel, kern.S_BARY:kern.S_BARY + 3],
-                    -sf[sel, kern.S_D:kern.S_D + 3])
-                sf[sel, kern.S_C:kern.S_C + 3] *= le
-        any_pass = bool(self.passable.any())
-        cur, nxt = buffers
-        face = np.empty(ns, dtype=np.int64)
-        b1, b2, t = np.zeros(ns), np.zeros(ns), np.zeros(ns)
-        none = np.full(ns, -1, dtype=np.int64), np.zeros((1, 11)), np.zeros(1, np.int64)
+            def lane_set():
+                return (np.empty((rows, kern.NF)), np.empty((rows, kern.NI), dtype=np.int64),
+                        np.empty((rows, nest), dtype=np.int64), np.empty((rows, nest)))
+
+            def shadow_set():
+                return (np.empty((srows, kern.NSF)), np.empty((srows, kern.NSI), dtype=np.int64),
+                        np.empty((srows, nest), dtype=np.int64), np.empty((srows, nest)))
+
+            buf = SimpleNamespace(n=n, lanes=(lane_set(), lane_set()),
+                                  shadows=(shadow_set(), shadow_set()),
+                                  es=embree.new_scratch(),
+                                  cso=np.full((1, nest), -1, dtype=np.int64),
+                                  csior=np.ones((1, nest)))
+            self._local.buffers = buf
+        return buf
+
+    def _shadows(self, ns, buf, sample, L, counts):
+        """Finish the ``ns`` shadow records parked in ``buf.shadows[0]``: multiply in the
+        radiance of lights whose emission varies (numpy), bind the records waiting at a
+        surface shaded with numpy, and carry them on (:func:`render.path.resolve_shadows`)
+        until each reaches its light or is blocked, adding what arrives to ``L``.
+        ``sample``: the chunk's ``(pixel, index, seed, sampler kind)``."""
+        cur, nxt = buf.shadows
         while ns:
-            t0 = _time.perf_counter()
-            kern.shadow_trace(self.scene_handle, self.tables, cur[0], ns, any_pass, face, b1, b2, t)
-            self._count(ns, _time.perf_counter() - t0)
-            tables, params, (lane_row, bf, bslot) = self.tables, self.params, none
-            u = t  # not read: no cutouts
-            if any_pass:
-                u = shadow_values(ns, cur[1], *sample)
-                tables, params, lane_row, bf, bslot = self._bind(
-                    face[:ns], b1[:ns], b2[:ns], cur[0][:ns, kern.S_D:kern.S_D + 3], cur[2],
-                    cur[3], cur[1][:ns, kern.S_NSTK], only=self.passable)
-            ns = kern.shadow_resolve(tables, ns, *cur, face, b1, b2, t, u, lane_row, params, bf,
-                                     bslot, L, *nxt, kern.scratch(tables))
+            sf, si, sso, ssior = cur
+            deferred = np.flatnonzero(si[:ns, kern.S_FACE] >= 0)
+            if len(deferred):  # area lights whose radiance varies: evaluate it now
+                f = si[deferred, kern.S_FACE]
+                objs = self.geo.face_object[f]
+                for k in np.unique(objs):
+                    sel = deferred[objs == k]
+                    le = self.emitters[k].emission(
+                        si[sel, kern.S_FACE], sf[sel, kern.S_BARY:kern.S_BARY + 3],
+                        -sf[sel, kern.S_D:kern.S_D + 3])
+                    sf[sel, kern.S_C:kern.S_C + 3] *= le
+                si[deferred, kern.S_FACE] = -1
+            tables, params, lane_row, bf, bslot = self._bind(
+                si[:ns, kern.S_HIT], sf[:ns, kern.S_HIT_B1], sf[:ns, kern.S_HIT_B2],
+                sf[:ns, kern.S_D:kern.S_D + 3], sso, ssior, si[:ns, kern.S_NSTK],
+                only=self.passable)
+            ns = kern.resolve_shadows(self.scene_handle, tables, ns, *cur, lane_row, params, bf,
+                                      bslot, L, *nxt, *sample, SOBOL_TABLE, kern.scratch(tables),
+                                      buf.es, counts)
             cur, nxt = nxt, cur
 
-    def _count(self, rays: int, seconds: float) -> None:
-        """Add to the rays traced and the time inside Embree (threads share them)."""
+    def _count(self, counts) -> None:
+        """Add a chunk's rays and its estimated time inside Embree (``counts``: rays,
+        timed rays, their cycles; threads share the totals)."""
+        rays, timed, cycles = (int(c) for c in counts)
+        seconds = cycles * rays / timed / embree.cycle_rate() if timed else 0.0
         with self._count_lock:
             self.rays += rays
             self.embree_time += seconds

@@ -1,36 +1,29 @@
-"""The path tracer's compiled stages: every ray through Embree, every vertex in numba.
+"""The path tracer's compiled core: every ray through Embree, every vertex in numba.
 
-:class:`render.integrator.Integrator` runs a wavefront of path lanes per chunk of
-samples through three kernels, with no Python between them unless a material's
-arguments vary over the surface:
-
-1. :func:`intersect`: each lane's next segment through Embree (``rtcIntersect1`` from
-   :mod:`render.embree`).
-2. :func:`bounce`: what happens on the segment and at its end, per lane: free-flight
-   sampling in the lane's medium (spectral MIS over a hero channel), the environment on
-   escape, and at a surface the cutout decision, emission (MIS against light
-   sampling), alpha and AOVs, next-event estimation (a shadow record per lane and
-   light sampled: the one :func:`select_light` picks, and each delta light when they
-   are sampled at every vertex), the
-   bsdf's sampled continuation, null crossings (index-matched or thin-walled straight
-   transmission: no vertex), the stack of closed objects the path is inside (their
-   media and IORs), and Russian roulette.  A scattering event in a medium is a vertex
-   with next-event estimation through the phase function and a phase-sampled
-   continuation.  Bsdfs are material programs run by :mod:`render.interpreter`.
-3. :func:`shadow_trace` and :func:`shadow_resolve`: the shadow records' segments, to
-   the light or through cutouts and null interfaces (entering and leaving media), each
-   attenuated by the media it runs through; what reaches the light is added to the
-   image.
+:func:`trace` is a megakernel: it carries each path lane of a chunk of samples from the
+camera to its end in one compiled loop, with no Python in between.  Per segment: the
+ray through Embree (``rtcIntersect1`` from :mod:`render.embree`), free-flight sampling
+in the lane's medium (spectral MIS over a hero channel), the environment on escape, and
+at a surface the cutout decision, emission (MIS against light sampling), alpha and
+AOVs, next-event estimation (the light :func:`select_light` picks, and each delta light
+when they are sampled at every vertex; each shadow ray traced at once by
+:func:`_walk_shadow`, through cutouts and null interfaces, attenuated by every medium on
+the way), the bsdf's sampled continuation, null crossings (index-matched or thin-walled
+straight transmission: no vertex), the stack of closed objects the path is inside
+(their media and IORs), and Russian roulette.  A scattering event in a medium is a
+vertex with next-event estimation through the phase function and a phase-sampled
+continuation.  Bsdfs are material programs run by :mod:`render.interpreter`; every
+sample value is drawn where it is needed (:func:`render.sampler.sample_pair`).
 
 Where an object's material varies over the surface (textures, noise, bump, a varying
-cutout or emission), the integrator shades the lanes that hit it with numpy between
-stages 1 and 2 (``material.shade``) and hands the kernels a parameter row, a shading
-frame, an opacity, an IOR and an emitted radiance per lane ("bindings").  Lanes on
-objects whose arguments are constant never leave the kernels.
-
-Lane state lives in two arrays per lane (``lf`` floats, ``li`` integers; the column
-constants below) and the stack of closed objects in ``so`` (object ids) and ``sior``
-(their IORs).  Kernels return the lanes that go on, compacted in order.
+cutout or emission), a lane that hits it is *parked*: its state and hit are written to
+the parked arrays (``lf`` floats, ``li`` integers, the column constants below; its
+stack of closed objects in ``so``/``sior``) and the kernel moves on.  The integrator
+shades the parked lanes with numpy (``material.shade``), hands the kernel a parameter
+row, a shading frame, an opacity, an IOR and an emitted radiance per lane
+("bindings"), and resumes them.  Shadow records park likewise (in ``sf``/``si``) at such
+surfaces and where a light's emission varies, and :func:`resolve_shadows` finishes
+them.  A scene of constant materials renders a chunk in one call.
 """
 
 from __future__ import annotations
@@ -47,6 +40,19 @@ from render.df.anisotropic_vdf import sample as _phase_sample
 from render.jit import njit
 from render.lights import INFINITE_DISTANCE
 from render.program import LUM_B, LUM_G, LUM_R
+from render.sampler import (
+    FIRST_SEGMENT_PAIR,
+    HERO_PAIR,
+    P_BSDF,
+    P_CHOICE,
+    P_CUTOUT,
+    P_FLIGHT,
+    P_LIGHT,
+    PAIRS_PER_SEGMENT,
+    SHADOW_PAIRS,
+    pixel_hash,
+    sample_pair,
+)
 from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
 from render.volume import (
     free_flight,
@@ -58,10 +64,8 @@ from render.volume import (
 
 __all__ = [
     "Tables",
-    "intersect",
-    "bounce",
-    "shadow_trace",
-    "shadow_resolve",
+    "trace",
+    "resolve_shadows",
     "outside_ior",
     "sample_light",
     "select_light",
@@ -69,7 +73,6 @@ __all__ = [
     "sample_lights",
     "selection",
     "escaped",
-    "lane_count_columns",
 ]
 
 INV_PI = 1.0 / np.pi
@@ -81,26 +84,33 @@ ONE_MINUS_EPS = float(np.nextafter(1.0, 0.0))
 SPECULAR = int(Lobe.SPECULAR)
 SPECULAR_TRANSMISSION = int(Lobe.SPECULAR_TRANSMISSION)
 
-# lane columns: lf (float64)
+# parked lanes' columns (:func:`trace`): lf (float64)
 ORG, D, BETA, R, PREV_PDF, SEG, SHIFT = 0, 3, 6, 9, 12, 13, 14
 # the previous vertex's position, normal (0 in a medium) and total light importance: the
 # light-selection probability of an emitter a bsdf-sampled path hits (MIS)
 PREV_P, PREV_N, PREV_SUM = 15, 18, 21
-NF = 22
-# li (int64)
-ID, DEPTH, DELTA, FIRST, CROSS, HERO, NSTK = 0, 1, 2, 3, 4, 5, 6
-NI = 7
-# shadow records: sf (float64), si (int64)
+HIT_T, HIT_B1, HIT_B2 = 22, 23, 24  # the pending hit
+NF = 25
+# li (int64): SEGMENT counts the path's segments (its sample pairs), HIT the pending
+# hit's triangle (-1: none, the ray escaped)
+ID, DEPTH, DELTA, FIRST, CROSS, HERO, NSTK, SEGMENT, HIT = 0, 1, 2, 3, 4, 5, 6, 7, 8
+NI = 9
+# shadow records: sf (float64), si (int64); S_FACE: the light's triangle where its
+# emission varies (-1: constant), S_HIT: a pending hit's triangle (-1: not traced yet)
 S_O, S_D, S_FAR, S_LEAD, S_TAIL, S_C, S_BARY = 0, 3, 6, 7, 8, 9, 12
-NSF = 15
-S_ID, S_FACE, S_NSTK, S_CROSS = 0, 1, 2, 3
-NSI = 4
+S_HIT_T, S_HIT_B1, S_HIT_B2 = 15, 16, 17
+NSF = 18
+S_ID, S_FACE, S_NSTK, S_CROSS, S_SEGMENT, S_HIT = 0, 1, 2, 3, 4, 5
+NSI = 6
 # AOV columns
 A_ALBEDO, A_NORMAL, A_DEPTH, A_UV, A_OBJECT = 0, 3, 6, 7, 9
 NA = 10
 
-#: object flags
-CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST = 1, 2, 4, 8, 16
+#: object flags; BOUND: shaded with numpy per hit, IOR_SENSITIVE: its program reads the
+#: IOR outside it (bound again inside other objects)
+CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8, 16, 32, 64
+#: one Embree call in this many is timed (the share of time inside Embree)
+TIMED_EVERY = 16
 
 #: ``light_kind``
 AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP, SUN_AND_SKY = 0, 1, 2, 3, 4, 5, 6
@@ -173,12 +183,9 @@ SC_SELECT, SC_EPS, SC_MAX_DEPTH, SC_RR_DEPTH, SC_ENV, SC_ROT_C, SC_ROT_S = 0, 1,
 SC_MEDIA, SC_AOV, SC_CAM = 7, 8, 9  # media present, AOVs asked for, camera position (9..11)
 SC_FWD = 12  # camera forward (12..14)
 SC_ENV_LIGHT = 15  # index of the environment light, -1: none
-N_SCALARS = 16
-
-
-def lane_count_columns():
-    """``(NF, NI, NSF, NSI, NA)``: columns of the lane, shadow-record and AOV arrays."""
-    return NF, NI, NSF, NSI, NA
+SC_BIND = 16  # some objects are shaded with numpy (lanes may park)
+SC_PASS = 17  # some objects are cutouts or null surfaces (shadow rays may pass)
+N_SCALARS = 18
 
 
 # ---------------------------------------------------------------- small kernels
@@ -215,7 +222,7 @@ def _unitize(x, y, z):
     return wx / length, wy / length, wz / length, True
 
 
-@njit
+@njit(inline="always")
 def _frame(nx, ny, nz, tx, ty, tz):
     """The shading frame's (s, t) from a unit normal and a tangent (Gram–Schmidt; Duff
     et al.'s frame where the tangent is missing or parallel)."""
@@ -260,7 +267,7 @@ def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
     return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
 
 
-@njit
+@njit(inline="always")
 def _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz):
     """Radiance along an escaping direction and the pdf of sampling it once the
     environment is selected: (pdf, r, g, b)."""
@@ -354,7 +361,7 @@ def environment_sh(tb, j, u):
     return out
 
 
-@njit
+@njit(inline="always")
 def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny, nz):
     """How much light ``j`` may contribute at p with normal n (n = 0: a point in a
     medium), up to a common factor: the weight by which :func:`select_light` picks it.
@@ -445,7 +452,7 @@ def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
     return min(intensity * cos_e * cos_i / d2, MAX_IMPORTANCE)
 
 
-@njit
+@njit(inline="always")
 def _node_importance(lb, mode, r, px, py, pz, nx, ny, nz):
     """:func:`_importance` for node ``r`` of the light tree (a row of ``lb`` after the
     lights'): the number of its lights, their power, or the bound of their merged
@@ -471,7 +478,7 @@ def _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny,
     return _node_importance(light_bounds, mode, x, px, py, pz, nx, ny, nz)
 
 
-@njit
+@njit(inline="always")
 def select_light(light_kind, light_bounds, light_params, light_tree, mode, px, py, pz, nx, ny,
                  nz, u):
     """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
@@ -523,7 +530,7 @@ def select_light(light_kind, light_bounds, light_params, light_tree, mode, px, p
     return x, pr, total
 
 
-@njit
+@njit(inline="always")
 def selection_pdf(light_kind, light_bounds, light_params, light_tree, mode, j, total, px, py,
                   pz, nx, ny, nz):
     """The probability that :func:`select_light` at p (normal n), whose top importances
@@ -547,7 +554,7 @@ def selection_pdf(light_kind, light_bounds, light_params, light_tree, mode, j, t
                         nz) / total
 
 
-@njit
+@njit(inline="always")
 def sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
                   light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
                   env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
@@ -714,30 +721,6 @@ def outside_ior(so, sior, nstk, objs):
 
 
 @njit(inline="always")
-def _copy_row(src, i, dst, j):
-    for c in range(src.shape[1]):
-        dst[j, c] = src[i, c]
-
-
-@njit(inline="always")
-def _copy_lane(a, b, c, d, i, na, nb, nc, nd, j):
-    """Row ``i`` of four per-lane arrays to row ``j`` of four others."""
-    _copy_row(a, i, na, j)
-    _copy_row(b, i, nb, j)
-    _copy_row(c, i, nc, j)
-    _copy_row(d, i, nd, j)
-
-
-@njit(inline="always")
-def _set_prev(lf, i, px, py, pz, nx, ny, nz, total):
-    """Lane ``i`` leaves a vertex at p (normal n, 0 in a medium) whose light importances
-    sum to ``total``."""
-    lf[i, PREV_P], lf[i, PREV_P + 1], lf[i, PREV_P + 2] = px, py, pz
-    lf[i, PREV_N], lf[i, PREV_N + 1], lf[i, PREV_N + 2] = nx, ny, nz
-    lf[i, PREV_SUM] = total
-
-
-@njit(inline="always")
 def _roulette(b0, b1, b2, mis, u):
     """Russian roulette on a throughput (spectral-MIS normalised): (survives, b0, b1, b2)
     with survival probability min(max channel, 0.95)."""
@@ -796,31 +779,404 @@ def scratch(tb) -> np.ndarray:
     return np.empty(interpreter.work_size(len(tb.code), len(tb.kids), len(tb.frames)))
 
 
-# -------------------------------------------------------------------- stage 1
-@njit
-def intersect(scene, tb, lf, n, face, b1, b2, t):
-    """First hits of lanes ``0 .. n-1`` (origins ``lf[:, ORG]``, directions ``lf[:, D]``):
-    global triangle (-1: none), barycentrics and distance."""
-    scratch = embree.new_scratch()
-    off = tb.face_offset
-    for i in range(n):
-        h = embree.intersect1(scene, lf[i, ORG], lf[i, ORG + 1], lf[i, ORG + 2], lf[i, D],
-                              lf[i, D + 1], lf[i, D + 2], 0.0, np.inf, scratch)
-        if h[4] == embree.MISS:
-            face[i] = -1
-        else:
-            face[i] = off[h[4]] + h[3]
-            b1[i], b2[i], t[i] = h[1], h[2], h[0]
-
-
-# -------------------------------------------------------------------- stage 2
+# ------------------------------------------------------------- the path walker
 @njit(inline="always")
-def _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane, px, py, pz,
+def _needs_binding(flags, cso, csior, nstk, k):
+    """Whether a hit on object ``k`` must first be shaded with numpy
+    (:meth:`render.integrator.Integrator._bind`): its arguments vary, or its program
+    reads the IOR outside it and the lane is inside another object whose IOR is not 1."""
+    if flags & BOUND:
+        return True
+    return (flags & IOR_SENSITIVE) != 0 and nstk > 0 and \
+        stack_outside_ior(cso, csior, 0, nstk, k) != 1.0
+
+
+@njit(inline="always")
+def _traced(counts, t0, rays):
+    """Count one Embree call; every TIMED_EVERY-th is timed (``counts``: rays, timed
+    rays, their cycles)."""
+    if rays % TIMED_EVERY == 0:
+        counts[1] += 1
+        counts[2] += embree.cycles() - t0
+
+
+@njit
+def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, sior,
+          lane_row, params, bf, bslot, L, alpha, aov, plf, pli, pso, psior, sf, si, sso,
+          ssior, ws, es, cso, csior, counts):
+    """Trace the paths of lanes ``0 .. n-1`` to their end, or until a path hits an object
+    that numpy must shade first (:func:`_needs_binding`): such a lane is *parked*, its
+    state and hit written to row ``p`` of ``plf``, ``pli``, ``pso``, ``psior``.
+
+    Fresh lanes (``resume`` False) start at the camera: lane ``i`` is sample
+    ``index[i]`` of pixel ``pixel[i]``, its ray ``o[i]``, ``d[i]``.  Resumed lanes are
+    the rows of ``lf``, ``li``, ``so``, ``sior`` (a previous call's parked lanes), each
+    with its hit, bound by row ``lane_row[i]`` (-1: none) of ``bf``, ``bslot`` and
+    ``params`` (:func:`bounce_binding`).  Shadow records that cannot be resolved here
+    (an area light whose emission varies, or a cutout or null surface that numpy must
+    shade) are parked in ``sf``, ``si``, ``sso``, ``ssior`` for :func:`resolve_shadows`.
+
+    What each path sees is added to ``L[lane]``, its alpha and AOVs (first hits) to
+    ``alpha`` and ``aov``.  Scratch: ``ws`` (the interpreter's), ``es`` (Embree's ray
+    record), ``cso``/``csior`` (a lane's stack of closed objects, one row).  Returns
+    ``(parked lanes, parked shadow records)``."""
+    sc = tb.scalars
+    eps = sc[SC_EPS]
+    max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
+    has_media = sc[SC_MEDIA] != 0.0
+    want_aov = sc[SC_AOV] != 0.0
+    may_bind = sc[SC_BIND] != 0.0
+    mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
+    n_every = 0  # delta lights sampled at every vertex
+    if mode >= EVERY_DELTA:
+        for j in range(len(tb.light_kind)):
+            n_every += 1 if _is_delta(tb.light_kind[j]) else 0
+    n_const = 2 * len(tb.obj_flags)
+    nest = cso.shape[1]
+    code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
+    face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
+    light_bounds, light_tree = tb.light_bounds, tb.light_tree
+    face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
+    medium, phase, face_offset = tb.medium, tb.phase, tb.face_offset
+    obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
+    obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
+    light_kind, light_params, light_first = tb.light_kind, tb.light_params, tb.light_first
+    light_cdf, light_corners, light_faces = tb.light_cdf, tb.light_corners, tb.light_faces
+    light_pdf_area, light_object, emit_light = tb.light_pdf_area, tb.light_object, tb.emit_light
+    env, env_image, env_p, env_cdf = tb.env, tb.env_image, tb.env_p, tb.env_cdf
+    sky, sky_p, sky_cdf = tb.sky, tb.sky_p, tb.sky_cdf
+    n_park = 0
+    n_shadow = 0
+    rays = 0
+    for i in range(n):
+        if resume:
+            lane = li[i, ID]
+            ox, oy, oz = lf[i, ORG], lf[i, ORG + 1], lf[i, ORG + 2]
+            dx, dy, dz = lf[i, D], lf[i, D + 1], lf[i, D + 2]
+            b0, b1, b2 = lf[i, BETA], lf[i, BETA + 1], lf[i, BETA + 2]
+            r0, r1, r2 = lf[i, R], lf[i, R + 1], lf[i, R + 2]
+            prev_pdf, seg, shift = lf[i, PREV_PDF], lf[i, SEG], lf[i, SHIFT]
+            vx, vy, vz = lf[i, PREV_P], lf[i, PREV_P + 1], lf[i, PREV_P + 2]
+            vnx, vny, vnz = lf[i, PREV_N], lf[i, PREV_N + 1], lf[i, PREV_N + 2]
+            prev_sum = lf[i, PREV_SUM]
+            depth, prev_delta, first = li[i, DEPTH], li[i, DELTA] != 0, li[i, FIRST] != 0
+            crossings, hero, nstk, segment = li[i, CROSS], li[i, HERO], li[i, NSTK], li[i, SEGMENT]
+            for s in range(nest):
+                cso[0, s], csior[0, s] = so[i, s], sior[i, s]
+            f = li[i, HIT]
+            hb1, hb2, t_hit = lf[i, HIT_B1], lf[i, HIT_B2], lf[i, HIT_T]
+            v = lane_row[i]
+        else:
+            lane = i
+            ox, oy, oz = o[i, 0], o[i, 1], o[i, 2]
+            dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+            b0 = b1 = b2 = r0 = r1 = r2 = 1.0
+            prev_pdf = seg = shift = prev_sum = 0.0
+            vx = vy = vz = vnx = vny = vnz = 0.0
+            depth, prev_delta, first = 1, True, True  # camera rays count as specular
+            crossings, hero, nstk, segment = 0, 0, 0, 0
+            for s in range(nest):
+                cso[0, s], csior[0, s] = -1, 1.0
+            f, hb1, hb2, t_hit = -1, 0.0, 0.0, 0.0
+            v = -1
+        ph = pixel_hash(seed, pixel[lane])
+        idx = index[lane]
+        if has_media and not resume:  # one hero channel per path
+            hero = min(int(sample_pair(v1, ph, idx, HERO_PAIR, kind)[0] * 3.0), 2)
+        have_hit = resume
+        while True:
+            # ---- the segment's first hit
+            if not have_hit:
+                rays += 1
+                t0 = embree.cycles() if rays % TIMED_EVERY == 0 else np.uint64(0)
+                h = embree.intersect1(scene, ox, oy, oz, dx, dy, dz, 0.0, np.inf, es)
+                _traced(counts, t0, rays)
+                f = -1
+                if h[4] != embree.MISS:
+                    f = face_offset[h[4]] + h[3]
+                    hb1, hb2, t_hit = h[1], h[2], h[0]
+                    if may_bind and _needs_binding(obj_flags[face_object[f]], cso, csior, nstk,
+                                                   face_object[f]):
+                        _park(plf, pli, pso, psior, n_park, cso, csior, lane, ox, oy, oz, dx,
+                              dy, dz, b0, b1, b2, r0, r1, r2, prev_pdf, seg, shift, vx, vy, vz,
+                              vnx, vny, vnz, prev_sum, depth, prev_delta, first, crossings,
+                              hero, nstk, segment, f, hb1, hb2, t_hit)
+                        n_park += 1
+                        break
+                v = -1
+            if n_shadow + 1 + n_every > len(sf):  # no room for this vertex's shadow records
+                _park(plf, pli, pso, psior, n_park, cso, csior, lane, ox, oy, oz, dx, dy, dz, b0,
+                      b1, b2, r0, r1, r2, prev_pdf, seg, shift, vx, vy, vz, vnx, vny, vnz,
+                      prev_sum, depth, prev_delta, first, crossings, hero, nstk, segment, f,
+                      hb1, hb2, t_hit)
+                n_park += 1
+                break
+            have_hit = False
+            pair0 = FIRST_SEGMENT_PAIR + segment * PAIRS_PER_SEGMENT
+            segment += 1
+            if f < 0:
+                t_hit = np.inf
+            # ---- the medium of the segment: attenuate, or scatter inside it
+            scattered = False
+            t_event = 0.0
+            med = -1
+            u_flight, u_roulette = 0.0, 0.0
+            if has_media and nstk > 0:
+                med = obj_medium[cso[0, nstk - 1]]
+            if med >= 0:
+                u_flight, u_roulette = sample_pair(v1, ph, idx, pair0 + P_FLIGHT, kind)
+                length = t_hit + shift
+                scattered, tt, w0, w1, w2, p0, p1, p2 = free_flight(medium, med, hero, u_flight,
+                                                                    length)
+                if scattered:
+                    t_event = tt - shift
+                pw = p0 if hero == 0 else (p1 if hero == 1 else p2)
+                if pw > 0.0:  # spectral MIS: r = p / p[hero], beta *= value / p[hero]
+                    b0, b1, b2 = b0 * w0 / pw, b1 * w1 / pw, b2 * w2 / pw
+                    r0, r1, r2 = r0 * p0 / pw, r1 * p1 / pw, r2 * p2 / pw
+                else:
+                    b0 = b1 = b2 = 0.0
+            mis = (r0 + r1 + r2) / 3.0
+            if scattered:
+                # ---- a scattering vertex in the medium: the phase function, no normal
+                px, py, pz = ox + t_event * dx, oy + t_event * dy, oz + t_event * dz
+                if not depth < max_depth:
+                    break
+                nx = ny = nz = gx = gy = gz = sx = sy = sz = qx = qy = qz = 0.0
+                wox, woy, woz = -dx, -dy, -dz  # world directions at a medium vertex
+                k, row, root, f_lo, f_hi, entry_ior, g_wo, dist_v = -1, 0, -1, 0, 0, 1.0, 0.0, 0.0
+                can_continue, is_null, encloses, front = True, False, False, True
+            elif f < 0:
+                # ---- escaped: the environment, weighted against light sampling
+                pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
+                if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+                    if not prev_delta:
+                        pe *= selection_pdf(light_kind, light_bounds, light_params, light_tree,
+                                            mode, env_light, prev_sum, vx, vy, vz, vnx, vny, vnz)
+                    w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
+                    L[lane, 0] += b0 * e0 * w
+                    L[lane, 1] += b1 * e1 * w
+                    L[lane, 2] += b2 * e2 * w
+                break
+            else:
+                # ---- a surface
+                k = face_object[f]
+                flags = obj_flags[k]
+                px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
+                    packed, faces, face_normal, f, hb1, hb2)
+                gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+                g_wo = -_dot(dx, dy, dz, gx, gy, gz)
+                front = g_wo > 0.0
+                slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
+                row = slot
+                if v >= 0:
+                    nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
+                    tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
+                    opacity, entry_ior = bf[v, 6], bf[v, 7]
+                    e0, e1, e2 = bf[v, 8], bf[v, 9], bf[v, 10]
+                    slot, row = bslot[v], n_const + v
+                else:
+                    opacity, entry_ior = obj_opacity[k], obj_ior[k]
+                    e0 = e1 = e2 = 0.0
+                dist_v = seg + t_hit
+                # cutouts: pass straight through with probability 1 - opacity
+                if (flags & CUTOUT) and crossings < MAX_CROSSINGS and \
+                        sample_pair(v1, ph, idx, pair0 + P_CUTOUT, kind)[0] >= opacity:
+                    side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
+                    ox, oy, oz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+                    seg = dist_v
+                    shift = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
+                    crossings += 1
+                    continue
+                sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+                wox = -_dot(dx, dy, dz, sx, sy, sz)
+                woy = -_dot(dx, dy, dz, qx, qy, qz)
+                woz = -_dot(dx, dy, dz, nx, ny, nz)
+                # emission, weighted against light sampling
+                if flags & EMIT_CONST and front and woz > 1e-10:
+                    e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
+                if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
+                    w = 1.0 / mis
+                    jl = face_light[f]
+                    cos_l = abs(g_wo)
+                    if not prev_delta and jl >= 0 and cos_l > 0.0:
+                        pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(
+                            light_kind, light_bounds, light_params, light_tree, mode, jl,
+                            prev_sum, vx, vy, vz, vnx, vny, vnz)
+                        w = _power(prev_pdf, pl) / mis
+                    L[lane, 0] += b0 * e0 * w
+                    L[lane, 1] += b1 * e1 * w
+                    L[lane, 2] += b2 * e2 * w
+                root, f_lo, f_hi = roots[slot], frame_lo[slot], frame_hi[slot]
+                if first:
+                    first = False
+                    alpha[lane] = 1.0
+                    if want_aov:
+                        if root >= 0:
+                            a0, a1, a2 = interpreter.cheap_albedo(code, kids, frames, params,
+                                                                  chat, row, ws, root, f_lo,
+                                                                  f_hi, wox, woy, woz)
+                            aov[lane, A_ALBEDO], aov[lane, A_ALBEDO + 1] = a0, a1
+                            aov[lane, A_ALBEDO + 2] = a2
+                        aov[lane, A_NORMAL], aov[lane, A_NORMAL + 1] = nx, ny
+                        aov[lane, A_NORMAL + 2] = nz
+                        aov[lane, A_DEPTH] = _dot(px - sc[SC_CAM], py - sc[SC_CAM + 1],
+                                                  pz - sc[SC_CAM + 2], sc[SC_FWD],
+                                                  sc[SC_FWD + 1], sc[SC_FWD + 2])
+                        aov[lane, A_UV], aov[lane, A_UV + 1] = uu, uv
+                        aov[lane, A_OBJECT] = k
+                if root < 0:
+                    break
+                can_continue = depth < max_depth
+                is_null = (flags & NULL) != 0
+                if not (can_continue or is_null):
+                    break
+                encloses = (flags & ENCLOSES) != 0
+            # ---- next-event estimation: the selected light, then every delta light
+            u_choice, u_lobe = sample_pair(v1, ph, idx, pair0 + P_CHOICE, kind)
+            prepared = False
+            total = 0.0
+            jd = -1
+            ul1 = ul2 = 0.0
+            if can_continue:
+                ul1, ul2 = sample_pair(v1, ph, idx, pair0 + P_LIGHT, kind)
+            for pick in range(1 + n_every if can_continue else 0):
+                if pick == 0:
+                    j, sel, total = select_light(light_kind, light_bounds, light_params,
+                                                 light_tree, mode, px, py, pz, nx, ny, nz,
+                                                 u_choice)  # -1: none
+                else:
+                    jd = _next_delta(light_kind, jd)
+                    j, sel = jd, 1.0
+                (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
+                    light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
+                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
+                    env_image, env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, ul1, ul2)
+                lpdf *= sel
+                if not lpdf > 0.0:
+                    continue
+                across = False
+                if scattered:
+                    f0, f1, f2, pb = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz, lx, ly, lz)
+                else:
+                    wlz = _dot(lx, ly, lz, nx, ny, nz)
+                    g_wi = _dot(lx, ly, lz, gx, gy, gz)
+                    if g_wi == 0.0 or (g_wi * g_wo > 0.0) != (wlz * woz > 0.0):
+                        continue
+                    f0, f1, f2, pb = interpreter.eval_pdf(
+                        code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy,
+                        woz, _dot(lx, ly, lz, sx, sy, sz), _dot(lx, ly, lz, qx, qy, qz), wlz)
+                    prepared = True
+                    across = encloses and g_wi * g_wo < 0.0  # the light is across the surface
+                w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf / mis
+                c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
+                if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
+                    continue
+                _shadow_record(eps, sf, si, sso, ssior, n_shadow, cso, csior, nstk, lane,
+                               segment - 1, px, py, pz, gx, gy, gz, lx, ly, lz, ldist, c0, c1,
+                               c2, lface, q0, q1, q2, not scattered,
+                               0.0 if scattered else _parallel_shift(eps, gx, gy, gz, lx, ly, lz))
+                if across:
+                    sn = si[n_shadow, S_NSTK]
+                    if front:
+                        sn = stack_push(sso, ssior, n_shadow, sn, k, entry_ior)
+                    else:
+                        sn = stack_pop(sso, ssior, n_shadow, sn, k)
+                    si[n_shadow, S_NSTK] = sn
+                if lface >= 0 or _walk_shadow(scene, tb, sf, si, sso, ssior, n_shadow, -1, params,
+                                              bf, bslot, L, ws, es, v1, ph, idx, kind, counts):
+                    n_shadow += 1
+            # ---- the bsdf's (or the phase function's) sample continues the path
+            ub1, ub2 = sample_pair(v1, ph, idx, pair0 + P_BSDF, kind)
+            straight = False
+            if scattered:
+                nx2, ny2, nz2, pdf, w0, w1, w2, lobe = _phase_sample(
+                    phase, med, 0, 0, wox, woy, woz, u_lobe, ub1, ub2)
+                if lobe == 0:
+                    break
+                g_new = 0.0
+            else:
+                wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
+                    code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
+                    u_lobe, ub1, ub2, prepared)
+                if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
+                    break
+                nx2 = wix * sx + wiy * qx + wiz * nx
+                ny2 = wix * sy + wiy * qy + wiz * ny
+                nz2 = wix * sz + wiy * qz + wiz * nz
+                g_new = _dot(nx2, ny2, nz2, gx, gy, gz)
+                if g_new == 0.0 or (g_new * g_wo > 0.0) != (wiz * woz > 0.0):
+                    break
+                straight = (is_null and lobe == SPECULAR_TRANSMISSION
+                            and _dot(nx2, ny2, nz2, dx, dy, dz) > 1.0 - STRAIGHT_TOL
+                            and crossings < MAX_CROSSINGS)
+                if not (can_continue or straight):
+                    break
+            b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
+            if not straight and depth >= rr_depth:
+                if med < 0:
+                    u_roulette = sample_pair(v1, ph, idx, pair0 + P_FLIGHT, kind)[1]
+                survives, b0, b1, b2 = _roulette(b0, b1, b2, mis, u_roulette)
+                if not survives:
+                    break
+            if not (b0 > 0.0 or b1 > 0.0 or b2 > 0.0):
+                break
+            if scattered:
+                ox, oy, oz = px, py, pz
+                shift = 0.0
+            else:
+                if straight:
+                    nx2, ny2, nz2 = dx, dy, dz
+                # a transmission through a closed object enters or leaves it
+                if encloses and g_new * g_wo < 0.0:
+                    if front:
+                        nstk = stack_push(cso, csior, 0, nstk, k, entry_ior)
+                    else:
+                        nstk = stack_pop(cso, csior, 0, nstk, k)
+                side = 1.0 if g_new >= 0.0 else -1.0
+                ox, oy, oz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+                shift = _parallel_shift(eps, gx, gy, gz, nx2, ny2, nz2)
+            dx, dy, dz = nx2, ny2, nz2
+            if straight:
+                seg = dist_v
+                crossings += 1
+            else:
+                prev_pdf, seg = pdf, 0.0
+                vx, vy, vz, vnx, vny, vnz, prev_sum = px, py, pz, nx, ny, nz, total
+                depth, crossings = depth + 1, 0
+                prev_delta = (not scattered) and (lobe & SPECULAR) != 0
+    counts[0] += rays
+    return n_park, n_shadow
+
+
+@njit
+def _park(plf, pli, pso, psior, p, cso, csior, lane, ox, oy, oz, dx, dy, dz, b0, b1, b2, r0,
+          r1, r2, prev_pdf, seg, shift, vx, vy, vz, vnx, vny, vnz, prev_sum, depth, prev_delta,
+          first, crossings, hero, nstk, segment, f, hb1, hb2, t_hit):
+    """A lane's state and pending hit to row ``p`` of the parked lanes."""
+    plf[p, ORG], plf[p, ORG + 1], plf[p, ORG + 2] = ox, oy, oz
+    plf[p, D], plf[p, D + 1], plf[p, D + 2] = dx, dy, dz
+    plf[p, BETA], plf[p, BETA + 1], plf[p, BETA + 2] = b0, b1, b2
+    plf[p, R], plf[p, R + 1], plf[p, R + 2] = r0, r1, r2
+    plf[p, PREV_PDF], plf[p, SEG], plf[p, SHIFT] = prev_pdf, seg, shift
+    plf[p, PREV_P], plf[p, PREV_P + 1], plf[p, PREV_P + 2] = vx, vy, vz
+    plf[p, PREV_N], plf[p, PREV_N + 1], plf[p, PREV_N + 2] = vnx, vny, vnz
+    plf[p, PREV_SUM] = prev_sum
+    plf[p, HIT_T], plf[p, HIT_B1], plf[p, HIT_B2] = t_hit, hb1, hb2
+    pli[p, ID], pli[p, DEPTH], pli[p, DELTA], pli[p, FIRST] = lane, depth, prev_delta, first
+    pli[p, CROSS], pli[p, HERO], pli[p, NSTK] = crossings, hero, nstk
+    pli[p, SEGMENT], pli[p, HIT] = segment, f
+    for s in range(pso.shape[1]):
+        pso[p, s], psior[p, s] = cso[0, s], csior[0, s]
+
+
+@njit(inline="always")
+def _shadow_record(eps, sf, si, sso, ssior, r, cso, csior, nstk, lane, segment, px, py, pz,
                    gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2, face, bary0, bary1, bary2,
                    offset, shift_in):
-    """Append a shadow ray from p toward the light sample; ``offset``: push the origin
-    off the surface (normal ``g``) on the light's side, else start at p (in a medium).
-    Returns the new count."""
+    """Write shadow record ``r``: a ray from p toward the light sample; ``offset``: push
+    the origin off the surface (normal ``g``) on the light's side, else start at p (in a
+    medium).  The record starts untraced (``S_HIT`` -1) with the lane's stack."""
     qx, qy, qz = px, py, pz
     if offset:
         side = 1.0 if _dot(lx, ly, lz, gx, gy, gz) >= 0.0 else -1.0
@@ -838,18 +1194,18 @@ def _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane, px, py,
         ux, uy, uz, sdist = lx, ly, lz, ldist
         lead = shift_in
     far = sdist * (1.0 - 1e-6) - eps if finite else sdist
-    sf[ns, S_O], sf[ns, S_O + 1], sf[ns, S_O + 2] = qx, qy, qz
-    sf[ns, S_D], sf[ns, S_D + 1], sf[ns, S_D + 2] = ux, uy, uz
-    sf[ns, S_FAR] = max(far, 0.0)
-    sf[ns, S_LEAD] = lead
-    sf[ns, S_TAIL] = sdist - far if finite else 0.0
-    sf[ns, S_C], sf[ns, S_C + 1], sf[ns, S_C + 2] = c0, c1, c2
-    sf[ns, S_BARY], sf[ns, S_BARY + 1], sf[ns, S_BARY + 2] = bary0, bary1, bary2
-    si[ns, S_ID], si[ns, S_FACE], si[ns, S_NSTK], si[ns, S_CROSS] = lane, face, nstk, 0
-    for s in range(so.shape[1]):
-        sso[ns, s] = so[i, s]
-        ssior[ns, s] = sior[i, s]
-    return ns + 1
+    sf[r, S_O], sf[r, S_O + 1], sf[r, S_O + 2] = qx, qy, qz
+    sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2] = ux, uy, uz
+    sf[r, S_FAR] = max(far, 0.0)
+    sf[r, S_LEAD] = lead
+    sf[r, S_TAIL] = sdist - far if finite else 0.0
+    sf[r, S_C], sf[r, S_C + 1], sf[r, S_C + 2] = c0, c1, c2
+    sf[r, S_BARY], sf[r, S_BARY + 1], sf[r, S_BARY + 2] = bary0, bary1, bary2
+    si[r, S_ID], si[r, S_FACE], si[r, S_NSTK], si[r, S_CROSS] = lane, face, nstk, 0
+    si[r, S_SEGMENT], si[r, S_HIT] = segment, -1
+    for s in range(sso.shape[1]):
+        sso[r, s] = cso[0, s]
+        ssior[r, s] = csior[0, s]
 
 
 @njit
@@ -859,433 +1215,161 @@ def _parallel_shift(eps, gx, gy, gz, dx, dy, dz):
     return eps / max(abs(_dot(gx, gy, gz, dx, dy, dz)), 0.1)
 
 
+# ---------------------------------------------------------------- shadow rays
+@njit(inline="always")
+def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, es, v1, ph,
+                 idx, kind, counts):
+    """Carry shadow record ``r`` to its light: attenuated by the medium of each segment,
+    through cutouts and null surfaces (:func:`_cross_shadow`); what arrives is added to
+    ``L``, what is blocked dropped.  A pending hit (``S_HIT >= 0``) is taken first, with
+    binding row ``v`` (-1: none).  Returns True where the record stops at a surface that
+    numpy must shade first: it is then left in row ``r`` with that hit pending, else
+    False.  (Inlined: the common case, a ray to the light, runs without a call.)"""
+    sc = tb.scalars
+    medium, face_object, obj_flags = tb.medium, tb.face_object, tb.obj_flags
+    while True:
+        f = si[r, S_HIT]
+        far = sf[r, S_FAR]
+        nstk = si[r, S_NSTK]
+        if f >= 0:  # the pending hit
+            si[r, S_HIT] = -1
+            hb1, hb2, t = sf[r, S_HIT_B1], sf[r, S_HIT_B2], sf[r, S_HIT_T]
+        else:
+            counts[0] += 1
+            timed = counts[0] % TIMED_EVERY == 0
+            t0 = embree.cycles() if timed else np.uint64(0)
+            if sc[SC_PASS] != 0.0:
+                h = embree.intersect1(scene, sf[r, S_O], sf[r, S_O + 1], sf[r, S_O + 2],
+                                      sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2], 0.0, far, es)
+                f = -1 if h[4] == embree.MISS else tb.face_offset[h[4]] + h[3]
+                hb1, hb2, t = h[1], h[2], h[0]
+            else:
+                blocked = embree.occluded1(scene, sf[r, S_O], sf[r, S_O + 1], sf[r, S_O + 2],
+                                           sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2], 0.0, far,
+                                           es)
+                f, hb1, hb2, t = -2 if blocked else -1, 0.0, 0.0, far
+            if timed:
+                counts[1] += 1
+                counts[2] += embree.cycles() - t0
+            v = -1
+            if f == -2:
+                return False
+            if f >= 0:
+                k = face_object[f]
+                flags = obj_flags[k]
+                if not (flags & (CUTOUT | NULL)) or si[r, S_CROSS] >= MAX_CROSSINGS:
+                    return False
+                if sc[SC_BIND] != 0.0 and _needs_binding(flags, sso[r:r + 1], ssior[r:r + 1],
+                                                         nstk, k):
+                    si[r, S_HIT] = f
+                    sf[r, S_HIT_T], sf[r, S_HIT_B1], sf[r, S_HIT_B2] = t, hb1, hb2
+                    return True
+        if f < 0:
+            t = far
+        if sc[SC_MEDIA] != 0.0 and nstk > 0:
+            med = tb.obj_medium[sso[r, nstk - 1]]
+            if med >= 0:
+                length = t + sf[r, S_LEAD] + (0.0 if f >= 0 else sf[r, S_TAIL])
+                for c in range(3):
+                    sf[r, S_C + c] *= transmittance(medium, med, c, length)
+        if f < 0:
+            lane = si[r, S_ID]
+            for c in range(3):
+                L[lane, c] += sf[r, S_C + c]
+            return False
+        if not _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslot,
+                             ws, v1, ph, idx, kind):
+            return False
+
+
 @njit
-def bounce(tb, m, face, hb1, hb2, ht, lf, li, so, sior, u, lane_row, params, bf, bslot, L,
-           alpha, aov, nlf, nli, nso, nsior, sf, si, sso, ssior, ws):
-    """Stage 2 for every lane: see the module docstring.
-
-    ``u`` (m, 9) uniforms per lane: free flight, cutout, light (3), bsdf or phase (3),
-    roulette.  Bindings: lane ``i`` with ``lane_row[i] = v >= 0`` runs program slot
-    ``bslot[v]`` with parameter row ``2k + v`` (k objects), and takes its shading
-    normal, tangent, opacity, IOR and emitted radiance from ``bf[v]`` (columns 0-2,
-    3-5, 6, 7, 8-10).
-
-    Lanes ``0 .. m-1`` are read; the lanes that go on are written to ``nlf``, ``nli``,
-    ``nso``, ``nsior`` and the shadow records to ``sf``, ``si``, ``sso``, ``ssior`` (all
-    with at least ``m`` rows, reused from segment to segment: a fresh allocation per
-    segment costs page faults).  ``ws``: the interpreter's scratch (:func:`scratch`).
-    Returns their counts ``(nn, ns)``.
-    """
+def _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslot, ws, v1, ph,
+                  idx, kind):
+    """Shadow record ``r`` at a hit on a cutout or null surface (triangle ``f``, binding
+    row ``v``): a cutout lets it pass with probability ``1 - opacity``, a null surface
+    with its straight-through transmission (entering or leaving the object).  Moves the
+    record to its next segment and returns True, or False where it is blocked."""
     sc = tb.scalars
     eps = sc[SC_EPS]
-    max_depth, rr_depth = sc[SC_MAX_DEPTH], sc[SC_RR_DEPTH]
-    has_media = sc[SC_MEDIA] != 0.0
-    want_aov = sc[SC_AOV] != 0.0
-    mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
-    n_every = 0  # delta lights sampled at every vertex
-    if mode >= EVERY_DELTA:
-        for j in range(len(tb.light_kind)):
-            n_every += 1 if _is_delta(tb.light_kind[j]) else 0
-    n_const = 2 * len(tb.obj_flags)
-    code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
-    # arrays out of the tuple once: each access costs numba two atomic reference counts
-    face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
-    light_bounds, light_tree = tb.light_bounds, tb.light_tree
-    face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
-    medium, phase = tb.medium, tb.phase
-    obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
-    obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
-    light_kind, light_params, light_first = tb.light_kind, tb.light_params, tb.light_first
-    light_cdf, light_corners, light_faces = tb.light_cdf, tb.light_corners, tb.light_faces
-    light_pdf_area, light_object, emit_light = tb.light_pdf_area, tb.light_object, tb.emit_light
-    env, env_image, env_p, env_cdf = tb.env, tb.env_image, tb.env_p, tb.env_cdf
-    sky, sky_p, sky_cdf = tb.sky, tb.sky_p, tb.sky_cdf
-    nn = 0
-    ns = 0
-    for i in range(m):
-        lane = li[i, ID]
-        depth = li[i, DEPTH]
-        nstk = li[i, NSTK]
-        ox, oy, oz = lf[i, ORG], lf[i, ORG + 1], lf[i, ORG + 2]
-        dx, dy, dz = lf[i, D], lf[i, D + 1], lf[i, D + 2]
-        b0, b1, b2 = lf[i, BETA], lf[i, BETA + 1], lf[i, BETA + 2]
-        r0, r1, r2 = lf[i, R], lf[i, R + 1], lf[i, R + 2]
-        prev_pdf = lf[i, PREV_PDF]
-        prev_delta = li[i, DELTA] != 0
-        vx, vy, vz = lf[i, PREV_P], lf[i, PREV_P + 1], lf[i, PREV_P + 2]
-        vnx, vny, vnz = lf[i, PREV_N], lf[i, PREV_N + 1], lf[i, PREV_N + 2]
-        prev_sum = lf[i, PREV_SUM]
-        f = face[i]
-        t_hit = ht[i] if f >= 0 else np.inf
-        # ---- the medium of the segment: attenuate, or scatter inside it
-        scattered = False
-        t_event = 0.0
-        med = -1
-        if has_media and nstk > 0:
-            med = obj_medium[so[i, nstk - 1]]
-        if med >= 0:
-            length = t_hit + lf[i, SHIFT]
-            hero = li[i, HERO]
-            scattered, tt, v0, v1, v2, p0, p1, p2 = free_flight(medium, med, hero, u[i, 0],
-                                                                length)
-            if scattered:
-                t_event = tt - lf[i, SHIFT]
-            ph = p0 if hero == 0 else (p1 if hero == 1 else p2)
-            if ph > 0.0:  # spectral MIS: r = p / p[hero], beta *= value / p[hero]
-                b0, b1, b2 = b0 * v0 / ph, b1 * v1 / ph, b2 * v2 / ph
-                r0, r1, r2 = r0 * p0 / ph, r1 * p1 / ph, r2 * p2 / ph
-            else:
-                b0 = b1 = b2 = 0.0
-        mis = (r0 + r1 + r2) / 3.0
-        if scattered:
-            # ---- a scattering vertex in the medium
-            px, py, pz = ox + t_event * dx, oy + t_event * dy, oz + t_event * dz
-            if not depth < max_depth:
-                continue
-            wox, woy, woz = -dx, -dy, -dz
-            total, jd = 0.0, -1
-            for pick in range(1 + n_every):  # the selected light, then every delta light
-                if pick == 0:
-                    j, sel, total = select_light(light_kind, light_bounds, light_params,
-                                                 light_tree, mode, px, py, pz, 0.0, 0.0, 0.0,
-                                                 u[i, 2])  # -1: none
-                else:
-                    jd = _next_delta(light_kind, jd)
-                    j, sel = jd, 1.0
-                (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
-                    light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
-                    env_image, env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3],
-                    u[i, 4])
-                lpdf *= sel
-                ph0, ph1, ph2, pp = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz,
-                                                              lx, ly, lz)
-                if lpdf > 0.0:
-                    w = (1.0 if ldelta else _power(lpdf, pp)) / lpdf / mis
-                    c0, c1, c2 = b0 * ph0 * l0 * w, b1 * ph1 * l1 * w, b2 * ph2 * l2 * w
-                    if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                        ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
-                                            px, py, pz, 0.0, 0.0, 0.0, lx, ly, lz, ldist, c0, c1,
-                                            c2, lface, q0, q1, q2, False, 0.0)
-            wix, wiy, wiz, pdf, w0, w1, w2, lobe = _phase_sample(
-                phase, med, 0, 0, wox, woy, woz, u[i, 5], u[i, 6], u[i, 7])
-            if lobe == 0:
-                continue
-            b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
-            if depth >= rr_depth:
-                survives, b0, b1, b2 = _roulette(b0, b1, b2, mis, u[i, 8])
-                if not survives:
-                    continue
-            if not (b0 > 0.0 or b1 > 0.0 or b2 > 0.0):
-                continue
-            _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
-            nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = px, py, pz
-            nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = wix, wiy, wiz
-            nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
-            nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
-            nlf[nn, PREV_PDF], nlf[nn, SEG], nlf[nn, SHIFT] = pdf, 0.0, 0.0
-            _set_prev(nlf, nn, px, py, pz, 0.0, 0.0, 0.0, total)
-            nli[nn, DEPTH], nli[nn, DELTA], nli[nn, CROSS] = depth + 1, 0, 0
-            nn += 1
-            continue
-        if f < 0:
-            # ---- escaped: the environment, weighted against light sampling
-            pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
-            if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
-                if not prev_delta:
-                    pe *= selection_pdf(light_kind, light_bounds, light_params, light_tree, mode,
-                                        env_light, prev_sum, vx, vy, vz, vnx, vny, vnz)
-                w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
-                L[lane, 0] += b0 * e0 * w
-                L[lane, 1] += b1 * e1 * w
-                L[lane, 2] += b2 * e2 * w
-            continue
-        # ---- a surface
-        k = face_object[f]
-        flags = obj_flags[k]
-        px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
-            packed, faces, face_normal, f, hb1[i], hb2[i])
-        gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
-        g_wo = -_dot(dx, dy, dz, gx, gy, gz)
-        front = g_wo > 0.0
-        slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
-        row = slot
-        v = lane_row[i]
-        if v >= 0:
-            nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
-            tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
-            opacity, entry_ior = bf[v, 6], bf[v, 7]
-            e0, e1, e2 = bf[v, 8], bf[v, 9], bf[v, 10]
-            slot, row = bslot[v], n_const + v
-        else:
-            opacity, entry_ior = obj_opacity[k], obj_ior[k]
-            e0 = e1 = e2 = 0.0
-        dist_v = lf[i, SEG] + t_hit
-        crossings = li[i, CROSS]
-        # cutouts: pass straight through with probability 1 - opacity
-        if (flags & CUTOUT) and u[i, 1] >= opacity and crossings < MAX_CROSSINGS:
-            side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
-            _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
-            nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = (
-                px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
-            nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
-            nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
-            nlf[nn, SEG] = dist_v
-            nlf[nn, SHIFT] = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
-            nli[nn, CROSS] = crossings + 1
-            nn += 1
-            continue
+    face_normal, roots = tb.face_normal, tb.roots
+    k = tb.face_object[f]
+    flags = tb.obj_flags[k]
+    if not (flags & (CUTOUT | NULL)) or si[r, S_CROSS] >= MAX_CROSSINGS:
+        return False
+    dx, dy, dz = sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2]
+    gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+    front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
+    slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
+    px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, _, _ = _attributes(
+        tb.packed, tb.faces, face_normal, f, hb1, hb2)
+    row = slot
+    if v >= 0:
+        nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
+        tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
+        opacity, entry_ior = bf[v, 6], bf[v, 7]
+        slot, row = bslot[v], 2 * len(tb.obj_flags) + v
+    else:
+        opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
+    c0, c1, c2 = sf[r, S_C], sf[r, S_C + 1], sf[r, S_C + 2]
+    cross = si[r, S_CROSS]
+    crossing = False
+    if (flags & CUTOUT) and sample_pair(
+            v1, ph, idx, SHADOW_PAIRS + (si[r, S_SEGMENT] << 8) + cross, kind)[0] >= opacity:
+        pass  # cut: passes unchanged
+    elif flags & NULL and roots[slot] >= 0:
         sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
         wox = -_dot(dx, dy, dz, sx, sy, sz)
         woy = -_dot(dx, dy, dz, qx, qy, qz)
         woz = -_dot(dx, dy, dz, nx, ny, nz)
-        # emission, weighted against light sampling
-        if flags & EMIT_CONST and front and woz > 1e-10:
-            e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
-        if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
-            w = 1.0 / mis
-            jl = face_light[f]
-            cos_l = abs(g_wo)
-            if not prev_delta and jl >= 0 and cos_l > 0.0:
-                pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(
-                    light_kind, light_bounds, light_params, light_tree, mode, jl, prev_sum, vx,
-                    vy, vz, vnx, vny, vnz)
-                w = _power(prev_pdf, pl) / mis
-            L[lane, 0] += b0 * e0 * w
-            L[lane, 1] += b1 * e1 * w
-            L[lane, 2] += b2 * e2 * w
-        root, f_lo, f_hi = roots[slot], frame_lo[slot], frame_hi[slot]
-        if li[i, FIRST]:
-            alpha[lane] = 1.0
-            if want_aov:
-                if root >= 0:
-                    a0, a1, a2 = interpreter.cheap_albedo(code, kids, frames, params, chat, row,
-                                                          ws, root, f_lo, f_hi, wox, woy, woz)
-                    aov[lane, A_ALBEDO], aov[lane, A_ALBEDO + 1] = a0, a1
-                    aov[lane, A_ALBEDO + 2] = a2
-                aov[lane, A_NORMAL], aov[lane, A_NORMAL + 1] = nx, ny
-                aov[lane, A_NORMAL + 2] = nz
-                aov[lane, A_DEPTH] = _dot(px - sc[SC_CAM], py - sc[SC_CAM + 1],
-                                          pz - sc[SC_CAM + 2], sc[SC_FWD], sc[SC_FWD + 1],
-                                          sc[SC_FWD + 2])
-                aov[lane, A_UV], aov[lane, A_UV + 1] = uu, uv
-                aov[lane, A_OBJECT] = k
-        if root < 0:
-            continue
-        can_continue = depth < max_depth
-        is_null = (flags & NULL) != 0
-        if not (can_continue or is_null):
-            continue
-        encloses = (flags & ENCLOSES) != 0
-        # next-event estimation
-        prepared = False
-        total = 0.0
-        jd = -1
-        for pick in range(1 + n_every if can_continue else 0):  # selected, then every delta
-            if pick == 0:
-                j, sel, total = select_light(light_kind, light_bounds, light_params, light_tree,
-                                             mode, px, py, pz, nx, ny, nz, u[i, 2])
-            else:
-                jd = _next_delta(light_kind, jd)
-                j, sel = jd, 1.0
-            (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
-                light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                light_pdf_area, light_object, obj_flags, emit_light, face_normal, env, env_image,
-                env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, u[i, 3], u[i, 4])
-            lpdf *= sel
-            wlx = _dot(lx, ly, lz, sx, sy, sz)
-            wly = _dot(lx, ly, lz, qx, qy, qz)
-            wlz = _dot(lx, ly, lz, nx, ny, nz)
-            g_wi = _dot(lx, ly, lz, gx, gy, gz)
-            if lpdf > 0.0 and g_wi != 0.0 and ((g_wi * g_wo > 0.0) == (wlz * woz > 0.0)):
-                f0, f1, f2, pb = interpreter.eval_pdf(code, kids, frames, params, chat, row, ws,
-                                                      root, f_lo, f_hi, wox, woy, woz, wlx, wly,
-                                                      wlz)
-                prepared = True
-                w = (1.0 if ldelta else _power(lpdf, pb)) / lpdf / mis
-                c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
-                if c0 > 0.0 or c1 > 0.0 or c2 > 0.0:
-                    shift = _parallel_shift(eps, gx, gy, gz, lx, ly, lz)
-                    ns = _shadow_record(eps, sf, si, sso, ssior, ns, so, sior, i, nstk, lane,
-                                        px, py, pz, gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2,
-                                        lface, q0, q1, q2, True, shift)
-                    if encloses and g_wi * g_wo < 0.0:  # the light is across the surface
-                        sn = si[ns - 1, S_NSTK]
-                        if front:
-                            sn = stack_push(sso, ssior, ns - 1, sn, k, entry_ior)
-                        else:
-                            sn = stack_pop(sso, ssior, ns - 1, sn, k)
-                        si[ns - 1, S_NSTK] = sn
-        # the bsdf's sample continues the path
         wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
-            code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
-            u[i, 5], u[i, 6], u[i, 7], prepared)
-        if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
-            continue
-        nx2 = wix * sx + wiy * qx + wiz * nx
-        ny2 = wix * sy + wiy * qy + wiz * ny
-        nz2 = wix * sz + wiy * qz + wiz * nz
-        g_new = _dot(nx2, ny2, nz2, gx, gy, gz)
-        if g_new == 0.0 or (g_new * g_wo > 0.0) != (wiz * woz > 0.0):
-            continue
-        straight = (is_null and lobe == SPECULAR_TRANSMISSION
-                    and _dot(nx2, ny2, nz2, dx, dy, dz) > 1.0 - STRAIGHT_TOL
-                    and crossings < MAX_CROSSINGS)
-        if not (can_continue or straight):
-            continue
-        b0, b1, b2 = b0 * w0, b1 * w1, b2 * w2
-        if not straight and depth >= rr_depth:
-            survives, b0, b1, b2 = _roulette(b0, b1, b2, mis, u[i, 8])
-            if not survives:
-                continue
-        if straight:
-            nx2, ny2, nz2 = dx, dy, dz
-        _copy_lane(lf, li, so, sior, i, nlf, nli, nso, nsior, nn)
-        # a transmission through a closed object enters or leaves it
-        if encloses and g_new * g_wo < 0.0:
-            if front:
-                nli[nn, NSTK] = stack_push(nso, nsior, nn, nstk, k, entry_ior)
-            else:
-                nli[nn, NSTK] = stack_pop(nso, nsior, nn, nstk, k)
-        side = 1.0 if g_new >= 0.0 else -1.0
-        nlf[nn, ORG], nlf[nn, ORG + 1], nlf[nn, ORG + 2] = (
-            px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
-        nlf[nn, D], nlf[nn, D + 1], nlf[nn, D + 2] = nx2, ny2, nz2
-        nlf[nn, BETA], nlf[nn, BETA + 1], nlf[nn, BETA + 2] = b0, b1, b2
-        nlf[nn, R], nlf[nn, R + 1], nlf[nn, R + 2] = r0, r1, r2
-        nlf[nn, SHIFT] = _parallel_shift(eps, gx, gy, gz, nx2, ny2, nz2)
-        nli[nn, FIRST] = 0
-        if straight:
-            nlf[nn, SEG] = dist_v
-            nli[nn, CROSS] = crossings + 1
+            tb.code, tb.kids, tb.frames, params, tb.chat, row, ws, roots[slot],
+            tb.frame_lo[slot], tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
+        wx = wix * sx + wiy * qx + wiz * nx
+        wy = wix * sy + wiy * qy + wiz * ny
+        wz = wix * sz + wiy * qz + wiz * nz
+        if not (lobe == SPECULAR_TRANSMISSION and _dot(wx, wy, wz, dx, dy, dz)
+                > 1.0 - STRAIGHT_TOL):
+            return False
+        c0, c1, c2 = c0 * pdf * w0, c1 * pdf * w1, c2 * pdf * w2
+        crossing = True
+    else:
+        return False
+    if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
+        return False
+    if crossing and (flags & ENCLOSES):
+        nstk = si[r, S_NSTK]
+        if front:
+            si[r, S_NSTK] = stack_push(sso, ssior, r, nstk, k, entry_ior)
         else:
-            nlf[nn, PREV_PDF], nlf[nn, SEG] = pdf, 0.0
-            _set_prev(nlf, nn, px, py, pz, nx, ny, nz, total)
-            nli[nn, DEPTH], nli[nn, CROSS] = depth + 1, 0
-            nli[nn, DELTA] = 1 if (lobe & SPECULAR) != 0 else 0
-        nn += 1
-    return nn, ns
-
-
-# -------------------------------------------------------------------- stage 3
-@njit
-def shadow_trace(scene, tb, sf, n, any_pass, face, b1, b2, t):
-    """The shadow records' segments: with ``any_pass`` (the scene has cutout or null
-    surfaces) their first hits as :func:`intersect` gives them, else only whether they
-    are blocked (``face`` -2) or free (-1)."""
-    scratch = embree.new_scratch()
-    off = tb.face_offset
-    for i in range(n):
-        ox, oy, oz = sf[i, S_O], sf[i, S_O + 1], sf[i, S_O + 2]
-        dx, dy, dz = sf[i, S_D], sf[i, S_D + 1], sf[i, S_D + 2]
-        far = sf[i, S_FAR]
-        if any_pass:
-            h = embree.intersect1(scene, ox, oy, oz, dx, dy, dz, 0.0, far, scratch)
-            if h[4] == embree.MISS:
-                face[i] = -1
-            else:
-                face[i] = off[h[4]] + h[3]
-                b1[i], b2[i], t[i] = h[1], h[2], h[0]
-        else:
-            face[i] = -2 if embree.occluded1(scene, ox, oy, oz, dx, dy, dz, 0.0, far,
-                                             scratch) else -1
+            si[r, S_NSTK] = stack_pop(sso, ssior, r, nstk, k)
+    side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
+    sf[r, S_O], sf[r, S_O + 1], sf[r, S_O + 2] = (
+        px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
+    cos = abs(_dot(gx, gy, gz, dx, dy, dz))
+    sf[r, S_FAR] = max(sf[r, S_FAR] - t - eps * cos, 0.0)
+    sf[r, S_LEAD] = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
+    sf[r, S_C], sf[r, S_C + 1], sf[r, S_C + 2] = c0, c1, c2
+    si[r, S_CROSS] = cross + 1
+    return True
 
 
 @njit
-def shadow_resolve(tb, m, sf, si, sso, ssior, face, hb1, hb2, ht, u, lane_row, params, bf,
-                   bslot, L, nsf, nsi, nso, nsior, ws):
-    """Attenuate each shadow segment by its medium; add what reaches the light to ``L``,
-    drop what is blocked, and move records that cross a cutout or a null surface to
-    their next segment (entering or leaving the object).  Bindings as in
-    :func:`bounce` (for the cutout and null surfaces hit).  Records ``0 .. m-1`` are
-    read; those still on their way are written to ``nsf``, ``nsi``, ``nso``, ``nsior``;
-    returns their count.  ``ws``: the interpreter's scratch (:func:`scratch`)."""
-    sc = tb.scalars
-    eps = sc[SC_EPS]
-    has_media = sc[SC_MEDIA] != 0.0
-    n_const = 2 * len(tb.obj_flags)
-    code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
-    face_normal, face_object, roots, medium = tb.face_normal, tb.face_object, tb.roots, tb.medium
-    frame_lo, frame_hi, packed, faces = tb.frame_lo, tb.frame_hi, tb.packed, tb.faces
-    obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
-    obj_opacity = tb.obj_opacity
+def resolve_shadows(scene, tb, m, sf, si, sso, ssior, lane_row, params, bf, bslot, L, nsf, nsi,
+                    nso, nsior, pixel, index, seed, kind, v1, ws, es, counts):
+    """:func:`_walk_shadow` for parked records ``0 .. m-1`` (their varying emission
+    already multiplied in, ``S_FACE`` -1), record ``r`` bound by ``lane_row[r]`` for its
+    pending hit.  Records that park again are copied to ``nsf``, ``nsi``, ``nso``,
+    ``nsior``; returns their count."""
     nn = 0
-    for i in range(m):
-        f = face[i]
-        if f == -2:
-            continue
-        c0, c1, c2 = sf[i, S_C], sf[i, S_C + 1], sf[i, S_C + 2]
-        nstk = si[i, S_NSTK]
-        t = ht[i] if f >= 0 else sf[i, S_FAR]
-        if has_media and nstk > 0:
-            med = obj_medium[sso[i, nstk - 1]]
-            if med >= 0:
-                length = t + sf[i, S_LEAD] + (0.0 if f >= 0 else sf[i, S_TAIL])
-                c0 *= transmittance(medium, med, 0, length)
-                c1 *= transmittance(medium, med, 1, length)
-                c2 *= transmittance(medium, med, 2, length)
-        if f < 0:
-            lane = si[i, S_ID]
-            L[lane, 0] += c0
-            L[lane, 1] += c1
-            L[lane, 2] += c2
-            continue
-        k = face_object[f]
-        flags = obj_flags[k]
-        if not (flags & (CUTOUT | NULL)) or si[i, S_CROSS] >= MAX_CROSSINGS:
-            continue
-        dx, dy, dz = sf[i, S_D], sf[i, S_D + 1], sf[i, S_D + 2]
-        gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
-        front = _dot(dx, dy, dz, gx, gy, gz) < 0.0
-        v = lane_row[i]
-        slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
-        px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, _, _ = _attributes(
-            packed, faces, face_normal, f, hb1[i], hb2[i])
-        row = slot
-        if v >= 0:
-            nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
-            tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
-            opacity, entry_ior = bf[v, 6], bf[v, 7]
-            slot, row = bslot[v], n_const + v
-        else:
-            opacity, entry_ior = obj_opacity[k], obj_ior[k]
-        crossing = False
-        if (flags & CUTOUT) and u[i] >= opacity:
-            pass  # cut: passes unchanged
-        elif flags & NULL and roots[slot] >= 0:
-            root = roots[slot]
-            sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
-            wox = -_dot(dx, dy, dz, sx, sy, sz)
-            woy = -_dot(dx, dy, dz, qx, qy, qz)
-            woz = -_dot(dx, dy, dz, nx, ny, nz)
-            wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
-                code, kids, frames, params, chat, row, ws, root, frame_lo[slot],
-                frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
-            wx = wix * sx + wiy * qx + wiz * nx
-            wy = wix * sy + wiy * qy + wiz * ny
-            wz = wix * sz + wiy * qz + wiz * nz
-            if not (lobe == SPECULAR_TRANSMISSION and _dot(wx, wy, wz, dx, dy, dz)
-                    > 1.0 - STRAIGHT_TOL):
-                continue
-            c0, c1, c2 = c0 * pdf * w0, c1 * pdf * w1, c2 * pdf * w2
-            crossing = True
-        else:
-            continue
-        if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
-            continue
-        _copy_lane(sf, si, sso, ssior, i, nsf, nsi, nso, nsior, nn)
-        if crossing and (flags & ENCLOSES):
-            if front:
-                nsi[nn, S_NSTK] = stack_push(nso, nsior, nn, nstk, k, entry_ior)
-            else:
-                nsi[nn, S_NSTK] = stack_pop(nso, nsior, nn, nstk, k)
-        side = 1.0 if _dot(dx, dy, dz, gx, gy, gz) >= 0.0 else -1.0
-        nsf[nn, S_O], nsf[nn, S_O + 1], nsf[nn, S_O + 2] = (
-            px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz)
-        cos = abs(_dot(gx, gy, gz, dx, dy, dz))
-        nsf[nn, S_FAR] = max(sf[i, S_FAR] - t - eps * cos, 0.0)
-        nsf[nn, S_LEAD] = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
-        nsf[nn, S_C], nsf[nn, S_C + 1], nsf[nn, S_C + 2] = c0, c1, c2
-        nsi[nn, S_CROSS] = si[i, S_CROSS] + 1
-        nn += 1
+    for r in range(m):
+        lane = si[r, S_ID]
+        if _walk_shadow(scene, tb, sf, si, sso, ssior, r, lane_row[r], params, bf, bslot, L, ws,
+                        es, v1, pixel_hash(seed, pixel[lane]), index[lane], kind, counts):
+            for c in range(sf.shape[1]):
+                nsf[nn, c] = sf[r, c]
+            for c in range(si.shape[1]):
+                nsi[nn, c] = si[r, c]
+            for c in range(sso.shape[1]):
+                nso[nn, c], nsior[nn, c] = sso[r, c], ssior[r, c]
+            nn += 1
     return nn

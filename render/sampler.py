@@ -39,8 +39,9 @@ import numpy as np
 
 from render.jit import njit
 
-__all__ = ["CAMERA_PAIR", "FIRST_SEGMENT_PAIR", "HERO_PAIR", "PAIRS_PER_SEGMENT",
-           "SAMPLERS", "SEGMENT_COLUMNS", "pair_values", "segment_values", "shadow_values"]
+__all__ = ["CAMERA_PAIR", "FIRST_SEGMENT_PAIR", "HERO_PAIR", "PAIRS_PER_SEGMENT", "P_LIGHT",
+           "P_BSDF", "P_CHOICE", "P_FLIGHT", "P_CUTOUT", "SHADOW_PAIRS", "SAMPLERS",
+           "SOBOL_TABLE", "pair_values", "pixel_hash", "sample_pair"]
 
 _M32 = 0xFFFFFFFF
 
@@ -68,7 +69,8 @@ def _byte_tables(v: np.ndarray) -> np.ndarray:
     return t
 
 
-_V1 = _byte_tables(_direction_numbers())
+#: the Sobol second dimension's byte tables (the kernels' ``v1``)
+SOBOL_TABLE = _byte_tables(_direction_numbers())
 
 #: the pairs of a path: the position in the pixel, the hero channel (media), then
 #: :data:`PAIRS_PER_SEGMENT` per path segment; shadow rays' cutout decisions take theirs
@@ -80,11 +82,12 @@ SOBOL, INDEPENDENT = 0, 1
 SAMPLERS = {"sobol": SOBOL, "independent": INDEPENDENT}
 SHADOW_PAIRS = 1 << 40
 
-#: a segment's nine uniforms (``u[:, 0..8]`` of :func:`render.path.bounce`) as five
-#: pairs: (light position), (bsdf direction), (light choice, bsdf lobe), (free flight,
-#: roulette), (cutout, unused); the pairs that decide 2D integrals are Sobol's (0, 2)
-SEGMENT_COLUMNS = np.array([[3, 4], [6, 7], [2, 5], [0, 8], [1, -1]], dtype=np.int64)
-PAIRS_PER_SEGMENT = len(SEGMENT_COLUMNS)
+#: a path segment's pairs, from ``FIRST_SEGMENT_PAIR + segment * PAIRS_PER_SEGMENT`` on:
+#: (light position), (bsdf direction), (light choice, bsdf lobe), (free flight, roulette),
+#: (cutout, unused); the pairs that decide 2D integrals are Sobol's (0, 2).  The path
+#: kernel draws each only where the vertex needs it.
+P_LIGHT, P_BSDF, P_CHOICE, P_FLIGHT, P_CUTOUT = 0, 1, 2, 3, 4
+PAIRS_PER_SEGMENT = 5
 
 
 @njit(inline="always")
@@ -119,14 +122,14 @@ def _mix(h):
 
 
 @njit(inline="always")
-def _pixel_hash(seed, pixel):
+def pixel_hash(seed, pixel):
     """64 bits that name ``pixel`` of the render seeded ``seed``."""
     return _mix(np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(pixel))
 
 
-@njit(inline="always")
-def _pair(v1, ph, index, pair, kind):
-    """Sample ``index`` of the pixel hashed ``ph`` (:func:`_pixel_hash`) in dimension
+@njit
+def sample_pair(v1, ph, index, pair, kind):
+    """Sample ``index`` of the pixel hashed ``ph`` (:func:`pixel_hash`) in dimension
     pair ``pair``: two uniforms in [0, 1) (``kind`` SOBOL or INDEPENDENT)."""
     h = _mix(ph ^ np.uint64(pair))
     m = np.uint64(_M32)
@@ -148,7 +151,7 @@ def _pair_values(v1, pixel, index, pair, seed, kind):
     n = len(pixel)
     out = np.empty((n, 2))
     for i in range(n):
-        out[i, 0], out[i, 1] = _pair(v1, _pixel_hash(seed, pixel[i]), index[i], pair, kind)
+        out[i, 0], out[i, 1] = sample_pair(v1, pixel_hash(seed, pixel[i]), index[i], pair, kind)
     return out
 
 
@@ -156,39 +159,5 @@ def pair_values(pixel: np.ndarray, index: np.ndarray, pair: int, seed: int,
                 kind: int = SOBOL) -> np.ndarray:
     """(n, 2) the values of dimension pair ``pair`` for samples ``index`` (n,) of
     pixels ``pixel`` (n,) (both int64)."""
-    return _pair_values(_V1, np.asarray(pixel, dtype=np.int64),
+    return _pair_values(SOBOL_TABLE, np.asarray(pixel, dtype=np.int64),
                         np.asarray(index, dtype=np.int64), int(pair), int(seed), int(kind))
-
-
-@njit
-def _segment_values(v1, columns, u, n, lane, pixel, index, first_pair, seed, kind):
-    for i in range(n):
-        j = lane[i]
-        ph = _pixel_hash(seed, pixel[j])
-        for g in range(len(columns)):
-            a, b = _pair(v1, ph, index[j], first_pair + g, kind)
-            u[i, columns[g, 0]] = a
-            if columns[g, 1] >= 0:
-                u[i, columns[g, 1]] = b
-
-
-def segment_values(u, n, lane, pixel, index, first_pair, seed, kind=SOBOL) -> None:
-    """Fill ``u[:n]`` (the nine uniforms of a path segment, :data:`SEGMENT_COLUMNS`)
-    for the ``n`` live lanes, lane ``i`` being sample ``index[lane[i]]`` of pixel
-    ``pixel[lane[i]]``, from pairs ``first_pair ...`` (compiled, no Python per lane)."""
-    _segment_values(_V1, SEGMENT_COLUMNS, u, n, lane, pixel, index, first_pair, seed, kind)
-
-
-@njit(allocates=True)
-def _shadow_values(v1, ns, si, pixel, index, seed, first_pair, kind):
-    u = np.empty(ns)
-    for r in range(ns):
-        j = si[r, 0]  # the record's lane (render.path.S_ID)
-        u[r] = _pair(v1, _pixel_hash(seed, pixel[j]), index[j], first_pair + si[r, 3], kind)[0]
-    return u
-
-
-def shadow_values(ns, si, pixel, index, seed, segment, kind=SOBOL) -> np.ndarray:
-    """(ns,) the uniforms that decide whether the shadow records ``si[:ns]`` (int columns
-    of :mod:`render.path`) pass the cutout they reached in path segment ``segment``."""
-    return _shadow_values(_V1, ns, si, pixel, index, seed, SHADOW_PAIRS + (segment << 8), kind)
