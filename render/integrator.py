@@ -81,20 +81,12 @@ from render.camera import primary_rays
 from render.df.anisotropic_vdf import SIGNATURE as _PHASE
 from render.film import Film
 from render.frame import Frame, mirror_z
-from render.lights import (
-    AreaLight,
-    ConstantEnvironment,
-    DirectionalLight,
-    LatLongEnvironment,
-    LightSet,
-    PointLight,
-    SpotLight,
-)
+from render.light_sampling import KINDS, MAX_EVERY_DELTA, light_table
+from render.lights import AreaLight, LightSet
 from render.numerics import dot
 from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
 from render.program import ProgramTable
 from render.sampler import CAMERA_PAIR, SAMPLERS, SOBOL_TABLE, pair_values
-from render.sky import SunAndSky
 from render.volume import MAX_NESTING, is_closed, medium_of
 
 __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
@@ -105,15 +97,6 @@ RAY_EPS = 1e-5
 #: cheap as walking a tree of them, and each light's own bound is the sharper); more
 #: are put in a light tree
 FLAT_LIGHTS = 8
-_LIGHT_KINDS = {
-    ConstantEnvironment: kern.ENVIRONMENT,
-    PointLight: kern.POINT,
-    SpotLight: kern.SPOT,
-    DirectionalLight: kern.DIRECTIONAL,
-    LatLongEnvironment: kern.ENVIRONMENT_MAP,
-    SunAndSky: kern.SUN_AND_SKY,
-    AreaLight: kern.AREA,
-}
 
 
 def _straight_through_candidate(material, two_faced: bool) -> bool:
@@ -182,51 +165,6 @@ def _varying(material) -> bool:
     return False
 
 
-def _luminance(rgb):
-    """Luminance of linear RGB (..., 3)."""
-    return np.asarray(rgb, dtype=np.float64) @ np.array([0.212671, 0.715160, 0.072169])
-
-
-def _union(d: float, ra: float, rb: float) -> tuple[float, float]:
-    """The smallest ball (or cone) holding balls of radii ``ra`` and ``rb`` whose centres
-    are ``d`` apart (cones: half-angles, and the angle between the axes): its radius,
-    and how far its centre lies from a's toward b's."""
-    if d + rb <= ra:
-        return ra, 0.0
-    if d + ra <= rb:
-        return rb, d
-    r = 0.5 * (d + ra + rb)
-    return r, r - ra
-
-
-def _merge_bounds(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The bounds (a ``light_bounds`` row) of a node of the light tree over two rows:
-    the sphere enclosing both spheres, the union of their emission cones (pbrt-v4's
-    ``Union(DirectionCone, DirectionCone)``; none if either has none or it covers the
-    sphere), and the sums of intensity, power and count."""
-    out = np.zeros_like(a)
-    ca, cb = a[kern.LB_C:kern.LB_C + 3], b[kern.LB_C:kern.LB_C + 3]
-    d = float(np.linalg.norm(cb - ca))
-    r, shift = _union(d, a[kern.LB_R], b[kern.LB_R])
-    out[kern.LB_C:kern.LB_C + 3] = ca + (cb - ca) * (shift / d) if shift > 0.0 else ca
-    out[kern.LB_R] = r
-    out[kern.LB_COS] = -1.0
-    if a[kern.LB_COS] > -1.0 and b[kern.LB_COS] > -1.0:
-        xa, xb = a[kern.LB_AXIS:kern.LB_AXIS + 3], b[kern.LB_AXIS:kern.LB_AXIS + 3]
-        ta, tb = np.arccos(np.clip([a[kern.LB_COS], b[kern.LB_COS]], -1.0, 1.0))
-        to, turn = _union(float(np.arccos(np.clip(xa @ xb, -1.0, 1.0))), ta, tb)
-        w = xb - (xa @ xb) * xa  # xa turned toward xb by ``turn``
-        norm = float(np.linalg.norm(w))
-        axis = xa if norm < 1e-12 else np.cos(turn) * xa + np.sin(turn) * w / norm
-        if to < np.pi:
-            out[kern.LB_AXIS:kern.LB_AXIS + 3] = axis / np.linalg.norm(axis)
-            out[kern.LB_COS] = np.cos(to)
-    out[kern.LB_I] = a[kern.LB_I] + b[kern.LB_I]
-    out[kern.LB_PHI] = a[kern.LB_PHI] + b[kern.LB_PHI]
-    out[kern.LB_N] = a[kern.LB_N] + b[kern.LB_N]
-    return out
-
-
 class Integrator:
     """A path tracer for one built scene.
 
@@ -266,10 +204,10 @@ class Integrator:
         #: delta lights sampled at every vertex besides the selected light (their shadow
         #: records: up to 1 + n_delta per lane)
         self.every_delta = bool(self.settings.every_delta_light and
-                                0 < n_delta <= kern.MAX_EVERY_DELTA)
+                                0 < n_delta <= MAX_EVERY_DELTA)
         self.shadow_rows = 1 + (n_delta if self.every_delta else 0)
         for light in self.lights.lights:
-            if type(light) not in _LIGHT_KINDS:
+            if type(light) not in KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
         mats = [o.material for o in self.objects]
         self.cutout = np.array([_has_cutout(m) for m in mats], dtype=bool)
@@ -361,7 +299,8 @@ class Integrator:
         geo = self.geo
         n_obj = len(self.objects)
         emit_hit = np.zeros((n_obj, 3))
-        emit_light = np.zeros((n_obj, 3))
+        #: each emitter's radiance of its light samples (None: it varies over it)
+        emission = dict.fromkeys(self.emitters)
         flags = np.zeros(n_obj, dtype=np.int64)
         flags[self.cutout] |= kern.CUTOUT
         flags[self.null_candidate] |= kern.NULL
@@ -388,71 +327,22 @@ class Integrator:
                 # edf.eval (1/pi) times the intensity (per area in power mode) on a hit,
                 # intensity / pi (per area) when sampled
                 emit_hit[k] = (intensity / light.area if power else intensity) / np.pi
-                emit_light[k] = radiance / light.area if power else radiance
+                emission[k] = radiance / light.area if power else radiance
         media = np.zeros((max(len(self.media), 1), 9))
         phase = np.zeros((max(len(self.media), 1), _PHASE.width))
         for j, m in enumerate(self.media):
             media[j] = m.row
             phase[j, _PHASE.offset("directional_bias")] = m.phase.program.P[0, 0]
-        lights = self.lights.lights
-        kinds = np.array([_LIGHT_KINDS[type(light)] for light in lights], dtype=np.int64)
-        light_object = np.full(len(lights), -1, dtype=np.int64)
-        light_params = np.zeros((len(lights), 11))
-        light_first = np.zeros(len(lights) + 1, dtype=np.int64)
-        faces, cdf, corners, pdf_area = [], [], [], np.zeros(len(lights))
-        env, env_kind, env_map, sky = np.zeros(3), 0, None, None
-        for j, light in enumerate(lights):
-            kind = kinds[j]
-            if kind == kern.AREA:
-                light_object[j] = light.object_id
-                faces.append(light.faces)
-                cdf.append(light._cdf)
-                corners.append(light.corners)
-                pdf_area[j] = light.pdf_area
-            elif kind == kern.ENVIRONMENT:
-                env, env_kind = np.asarray(light.radiance, dtype=np.float64), kind
-            elif kind == kern.ENVIRONMENT_MAP:
-                env_kind, env_map = kind, light
-            elif kind == kern.SUN_AND_SKY:
-                env_kind, sky = kind, light
-            elif kind == kern.DIRECTIONAL:
-                light_params[j, 3:6] = light.direction
-                light_params[j, 6:9] = light.irradiance
-            else:
-                light_params[j, 0:3] = light.position
-                light_params[j, 6:9] = light.intensity
-                if kind == kern.SPOT:
-                    light_params[j, 3:6] = light.direction
-                    light_params[j, 9:11] = light.cos_cutoff, light.cos_width
-            light_first[j + 1] = light_first[j] + (len(light.faces) if kind == kern.AREA else 0)
-        if env_map is None:
-            env_image, env_p, env_cdf, rot = np.zeros((1, 1, 3)), np.zeros(1), np.ones(1), 0.0
-        else:
-            env_image, env_p, env_cdf = env_map.image, env_map._p, env_map._cdf
-            rot = env_map.rotation
-        if sky is None:
-            sky_params, sky_p, sky_cdf = np.zeros(1), np.zeros(1), np.ones(1)
-        else:
-            sky_params, sky_p, sky_cdf = sky.kernel_params(), sky._p, sky._cdf
+        lt = light_table(self.lights.lights, len(geo.faces), emission, self._scene_disk(),
+                         self.every_delta, self.settings.light_selection)
         scalars = np.zeros(kern.N_SCALARS)
-        # an environment the only light to choose (the rest sampled at every vertex): its
-        # importance is the same everywhere, so there is nothing to weigh per vertex
-        chosen = [light for light in lights if not (self.every_delta and light.delta)]
-        alone = len(chosen) == 1 and chosen[0].infinite
-        mode = "uniform" if alone else self.settings.light_selection
-        scalars[kern.SC_SELECT] = float(kern.SELECTIONS[mode]
-                                        + (kern.EVERY_DELTA if self.every_delta else 0))
-        env_index = [j for j, light in enumerate(lights) if light.infinite]
-        scalars[kern.SC_ENV_LIGHT] = float(env_index[0]) if env_index else -1.0
-        face_light = np.full(len(self.geo.faces), -1, dtype=np.int64)
-        for j, light in enumerate(lights):
-            if kinds[j] == kern.AREA:
-                face_light[light.faces] = j
+        scalars[kern.SC_SELECT] = float(lt.mode)
+        scalars[kern.SC_LIGHTS] = float(lt.n_lights)
+        scalars[kern.SC_ENV_LIGHT] = float(lt.env_light)
+        scalars[kern.SC_ROT_C], scalars[kern.SC_ROT_S] = lt.rot_c, lt.rot_s
         scalars[kern.SC_EPS] = self.eps
         scalars[kern.SC_MAX_DEPTH] = float(self.max_depth)
         scalars[kern.SC_RR_DEPTH] = float(self.settings.rr_depth)
-        scalars[kern.SC_ENV] = float(env_kind)
-        scalars[kern.SC_ROT_C], scalars[kern.SC_ROT_S] = np.cos(rot), np.sin(rot)
         scalars[kern.SC_MEDIA] = float(bool(self.media))
         scalars[kern.SC_AOV] = float(bool(self.aovs))
         scalars[kern.SC_BIND] = float(self.may_bind)
@@ -469,132 +359,15 @@ class Integrator:
             geo.face_offset.astype(np.int64),
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
-            flags, opacity, ior, obj_medium, emit_hit, emit_light,
-            face_light, media, phase,
-            kinds, light_object, light_params, light_first,
-            np.concatenate(faces) if faces else np.zeros(0, dtype=np.int64),
-            np.concatenate(cdf) if cdf else np.zeros(0),
-            np.concatenate(corners) if corners else np.zeros((0, 3, 3)),
-            pdf_area, *self._light_tree(kinds, self._light_bounds(kinds, emit_light, flags)),
-            env, env_image, env_p, env_cdf, sky_params, sky_p, sky_cdf, scalars)
-        self._environment_bounds(tables)
+            flags, opacity, ior, obj_medium, emit_hit, lt.face_light, media, phase,
+            lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist, scalars)
         return tables, params
-
-    def _environment_bounds(self, tables, samples: int = 1 << 14) -> None:
-        """Each environment's irradiance as three bands of spherical harmonics
-        (:func:`render.path.environment_sh`, by ``samples`` of its own importance
-        sampling at Sobol points) into ``light_params[j, 0:9]``, and its intensity (pi
-        times the mean radiance: the harmonics' constant band) and power into
-        ``light_bounds``."""
-        u = pair_values(np.zeros(samples, dtype=np.int64), np.arange(samples), 0, 0)
-        for j, light in enumerate(self.lights.lights):
-            if light.infinite:
-                c = kern.environment_sh(tables, j, u)
-                tables.light_params[j, 0:9] = c
-                e = max(float(c[0]) * kern.SH_Y00, 0.0)
-                tables.light_bounds[j, kern.LB_I] = e
-                tables.light_bounds[j, kern.LB_PHI] = self._scene_disk() * e
-
-    def _light_tree(self, kinds, bounds):
-        """The light tree over the lights that next-event estimation selects and that
-        have a place (area, point and spot lights; delta lights only when they are not
-        sampled at every vertex): ``(bounds with a row per node appended, tree)``, tree
-        row = (parent, child a, child b), -1 for none; the root is row ``len(kinds)``.
-
-        Built top down: the lights' bounding-sphere centres are cut at the median of the
-        axis along which they spread most (pbrt-v4 builds its BVHLightSampler by the
-        surface-area-orientation heuristic; the median cut is simpler and keeps the
-        tree balanced).  A node's bounds merge its children's: the enclosing sphere,
-        the union of their emission cones (none if either has none), the sum of their
-        intensities, powers and counts.  With :data:`FLAT_LIGHTS` or fewer, no tree."""
-        n = len(kinds)
-        tree = np.full((n, 3), -1, dtype=np.int64)
-        finite = (kinds == kern.AREA) | (kinds == kern.POINT) | (kinds == kern.SPOT)
-        delta = (kinds == kern.POINT) | (kinds == kern.SPOT)
-        members = np.flatnonzero(finite & ~delta if self.every_delta else finite)
-        bounds = bounds.copy()
-        bounds[:, kern.LB_N] = 1.0
-        bounds[kinds != kern.AREA, kern.LB_COS] = -1.0
-        if len(members) <= FLAT_LIGHTS:
-            return bounds, tree
-        rows, links = [], []
-
-        def build(items: np.ndarray, parent: int) -> int:
-            if len(items) == 1:
-                tree[items[0], 0] = parent
-                return int(items[0])
-            r = n + len(rows)
-            rows.append(None)
-            links.append([parent, -1, -1])
-            c = bounds[items, kern.LB_C:kern.LB_C + 3]
-            order = items[np.argsort(c[:, int(np.argmax(np.ptp(c, axis=0)))], kind="stable")]
-            half = len(order) // 2
-            a, b = build(order[:half], r), build(order[half:], r)
-            links[r - n][1:] = [a, b]
-            rows[r - n] = _merge_bounds(row(a), row(b))
-            return r
-
-        def row(x: int) -> np.ndarray:
-            return bounds[x] if x < n else rows[x - n]
-
-        build(members, -1)
-        return (np.vstack([bounds, np.array(rows)]),
-                np.vstack([tree, np.array(links, dtype=np.int64)]))
 
     def _scene_disk(self) -> float:
         """pi r^2 of the scene's bounding sphere (the cross-section a distant light
         covers, for its power)."""
         lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
         return np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
-
-    def _light_bounds(self, kinds, emit_light, flags):
-        """(l, NLB) what each light can contribute (:func:`render.path._importance`):
-        bounding sphere, emission cone, intensity (area lights: mean radiance x area,
-        directional: irradiance, environments: pi x mean radiance; luminance) and power
-        (pbrt-v4's ``Light::Phi``: pi L A, 4 pi I, a spot's cone, pi r^2 E for a directional
-        light and pi L x pi r^2 for an environment, r the scene's bounding radius;
-        environments' are set by :meth:`_environment_bounds`)."""
-        disk = self._scene_disk()
-        out = np.zeros((len(kinds), kern.NLB))
-        for j, light in enumerate(self.lights.lights):
-            kind = kinds[j]
-            if kind == kern.AREA:
-                c = light.corners.reshape(-1, 3)
-                a, b = c.min(axis=0), c.max(axis=0)
-                out[j, kern.LB_C:kern.LB_C + 3] = 0.5 * (a + b)
-                out[j, kern.LB_R] = 0.5 * float(np.linalg.norm(b - a))
-                area = 0.5 * np.linalg.norm(np.cross(light.corners[:, 1] - light.corners[:, 0],
-                                                     light.corners[:, 2] - light.corners[:, 0]),
-                                            axis=1)
-                k = light.object_id
-                axis = (area[:, None] * light.normals).sum(axis=0)
-                length = float(np.linalg.norm(axis))
-                cos_o = -1.0  # two-sided or varying emission: no cone
-                const = bool(flags[k] & kern.EMIT_CONST)
-                if const and length > 1e-9 * light.area:
-                    axis = axis / length
-                    cos_o = float(np.min(light.normals @ axis))
-                    out[j, kern.LB_AXIS:kern.LB_AXIS + 3] = axis
-                out[j, kern.LB_COS] = cos_o
-                if const:
-                    radiance = float(_luminance(emit_light[k]))
-                else:  # varying: its radiance at the triangles' centroids toward their normals
-                    third = np.full((len(light.faces), 3), 1.0 / 3.0)
-                    rad = _luminance(light.emission(light.faces, third, light.normals))
-                    radiance = float((rad * area).sum() / light.area)
-                out[j, kern.LB_I] = radiance * light.area
-                out[j, kern.LB_PHI] = np.pi * radiance * light.area
-            elif kind in (kern.POINT, kern.SPOT):
-                intensity = _luminance(light.intensity)
-                out[j, kern.LB_C:kern.LB_C + 3] = light.position
-                out[j, kern.LB_I] = intensity
-                cone = 2.0 if kind == kern.POINT else (
-                    (1.0 - light.cos_width) + 0.5 * (light.cos_width - light.cos_cutoff))
-                out[j, kern.LB_PHI] = 2.0 * np.pi * cone * intensity
-            elif kind == kern.DIRECTIONAL:
-                out[j, kern.LB_I] = _luminance(light.irradiance)
-                out[j, kern.LB_PHI] = disk * out[j, kern.LB_I]
-        return out
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
@@ -782,7 +555,8 @@ class Integrator:
         lanes, parked = buf.lanes
         counts = np.zeros(3, dtype=np.uint64)
         tables, params = self.tables, self.params
-        lane_row, bf, bslot = np.full(1, -1, dtype=np.int64), np.zeros((1, 11)), np.zeros(1, np.int64)
+        lane_row, bf = np.full(1, -1, dtype=np.int64), np.zeros((1, 11))
+        bslot = np.zeros(1, dtype=np.int64)
         m, resume = n, False
         while True:
             m, ns = kern.trace(self.scene_handle, tables, m, resume, o, d, pixel, index, seed,

@@ -34,12 +34,23 @@ from collections import namedtuple
 import numpy as np
 
 from render import embree, interpreter
+from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
 from render.df.anisotropic_vdf import sample as _phase_sample
 from render.jit import njit
+from render.light_sampling import (
+    EVERY_DELTA,
+    L_KIND,
+    L_PDF_AREA,
+    environment_radiance,
+    is_delta,
+    next_delta,
+    sample_light,
+    select_light,
+    selection_pdf,
+)
 from render.lights import INFINITE_DISTANCE
-from render.program import LUM_B, LUM_G, LUM_R
 from render.sampler import (
     FIRST_SEGMENT_PAIR,
     HERO_PAIR,
@@ -53,7 +64,6 @@ from render.sampler import (
     pixel_hash,
     sample_pair,
 )
-from render.sky import sun_and_sky_eval, sun_and_sky_pdf, sun_and_sky_sample
 from render.volume import (
     free_flight,
     stack_outside_ior,
@@ -67,15 +77,11 @@ __all__ = [
     "trace",
     "resolve_shadows",
     "outside_ior",
-    "sample_light",
-    "select_light",
-    "selection_pdf",
     "sample_lights",
     "selection",
     "escaped",
 ]
 
-INV_PI = 1.0 / np.pi
 #: a lane may pass through at most this many cutout or null surfaces in a row
 MAX_CROSSINGS = 64
 #: a transmission counts as straight through (a null event) within this 1 - cos
@@ -112,27 +118,6 @@ CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8
 #: one Embree call in this many is timed (the share of time inside Embree)
 TIMED_EVERY = 16
 
-#: ``light_kind``
-AREA, ENVIRONMENT, POINT, SPOT, DIRECTIONAL, ENVIRONMENT_MAP, SUN_AND_SKY = 0, 1, 2, 3, 4, 5, 6
-#: ``[render] light_selection`` (``scalars[SC_SELECT]``)
-UNIFORM, POWER, CONTRIBUTION = 0, 1, 2
-SELECTIONS = {"uniform": UNIFORM, "power": POWER, "contribution": CONTRIBUTION}
-#: added to the mode: every delta light is sampled at every vertex, outside the selection
-EVERY_DELTA = 4
-#: at most this many delta lights are sampled at every vertex (more: selected)
-MAX_EVERY_DELTA = 4
-#: ``light_bounds`` columns: bounding-sphere centre and radius, emission cone axis and
-#: cos of its half-angle (area lights; -1: no cone), intensity (the importance's
-#: numerator, see :func:`_importance`), power (pbrt's ``PowerLightSampler``), and the
-#: number of lights below (1 for a light, more for a node of the light tree)
-LB_C, LB_R, LB_AXIS, LB_COS, LB_I, LB_PHI, LB_N = 0, 3, 4, 7, 8, 9, 10
-NLB = 11
-#: the cosine at the receiver never counts less than this in a light's importance: the
-#: shading normal is not the geometric one, so "perpendicular" is no proof of "black"
-COS_FLOOR = 0.02
-#: an importance is clamped here so that a sum of many never overflows
-MAX_IMPORTANCE = 1e250
-
 #: Scene tables of the kernels (float64 unless noted).
 Tables = namedtuple(
     "Tables",
@@ -154,32 +139,22 @@ Tables = namedtuple(
         "obj_ior",  # (k,) constant IOR (mean over channels)
         "obj_medium",  # (k,) int64 medium of the inside, -1: none
         "emit_hit",  # (k, 3) radiance seen on the front of a constant diffuse emitter
-        "emit_light",  # (k, 3) radiance of its light samples
         "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
         "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
         "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
-        "light_kind",  # (l,) int64
-        "light_object",  # (l,) int64 object of each area light, -1 for the others
-        "light_params",  # (l, 11) position, direction, intensity, cos cutoff, cos width
-        "light_first",  # (l + 1,) int64 range of each light's triangles in light_faces
-        "light_faces",  # (t,) int64 emissive triangles
-        "light_cdf",  # (t,) area cdf within each light
-        "light_corners",  # (t, 3, 3) their corners
-        "light_pdf_area",  # (l,) 1 / area
-        "light_bounds",  # (l + nodes, NLB) what a light (or a node of the light tree) can
-        # contribute (LB_* columns)
-        "light_tree",  # (l + nodes, 3) int64 parent, child a, child b (-1: none)
-        "env",  # (3,) constant environment radiance
-        "env_image",  # (h, w, 3) environment map radiance
-        "env_p",  # (h * w,) its texels' probabilities
-        "env_cdf",  # (h * w,)
-        "sky",  # sun-and-sky parameters (render.sky.SunAndSky.kernel_params)
-        "sky_p",
-        "sky_cdf",
-        "scalars",  # (12,) see SC_* below
+        # the lights (render.light_sampling.light_table): a row per light and per node of
+        # the light tree, a row per emissive triangle, an environment map and its texels'
+        # (probabilities, cdf), the sun and sky's parameters and (probabilities, cdf)
+        "lights",
+        "light_tri",
+        "env_image",
+        "env_dist",
+        "sky",
+        "sky_dist",
+        "scalars",  # (N_SCALARS,) see SC_* below
     ],
 )
-SC_SELECT, SC_EPS, SC_MAX_DEPTH, SC_RR_DEPTH, SC_ENV, SC_ROT_C, SC_ROT_S = 0, 1, 2, 3, 4, 5, 6
+SC_SELECT, SC_EPS, SC_MAX_DEPTH, SC_RR_DEPTH, SC_LIGHTS, SC_ROT_C, SC_ROT_S = 0, 1, 2, 3, 4, 5, 6
 SC_MEDIA, SC_AOV, SC_CAM = 7, 8, 9  # media present, AOVs asked for, camera position (9..11)
 SC_FWD = 12  # camera forward (12..14)
 SC_ENV_LIGHT = 15  # index of the environment light, -1: none
@@ -239,475 +214,31 @@ def _frame(nx, ny, nz, tx, ty, tz):
     return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
 
 
-@njit
-def _search_right(cdf, a, b, u):
-    """``a + searchsorted(cdf[a:b], u, side="right")``, clipped to ``b - 1``."""
-    lo, hi = a, b
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if cdf[mid] <= u:
-            lo = mid + 1
-        else:
-            hi = mid
-    return min(lo, b - 1)
-
-
-@njit
-def _environment_map(image, p, rot_c, rot_s, dx, dy, dz):
-    """A latitude-longitude map's (solid-angle pdf, radiance rgb) along ``d``."""
-    h, w = image.shape[0], image.shape[1]
-    x = rot_c * dx - rot_s * dz
-    z = rot_s * dx + rot_c * dz
-    u = 0.5 + math.atan2(x, -z) / (2.0 * np.pi)
-    v = math.acos(min(max(dy, -1.0), 1.0)) / np.pi
-    i = min(max(int(u * w), 0), w - 1)
-    j = min(max(int(v * h), 0), h - 1)
-    sin_t = math.sin(np.pi * v)
-    pdf = p[j * w + i] * h * w / (2.0 * np.pi * np.pi * sin_t) if sin_t > 1e-12 else 0.0
-    return pdf, image[j, i, 0], image[j, i, 1], image[j, i, 2]
-
-
-@njit(inline="always")
-def _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz):
-    """Radiance along an escaping direction and the pdf of sampling it once the
-    environment is selected: (pdf, r, g, b)."""
-    kind = sc[SC_ENV]
-    if kind == ENVIRONMENT:
-        return 0.25 / np.pi, env[0], env[1], env[2]
-    if kind == ENVIRONMENT_MAP:
-        pe, e0, e1, e2 = _environment_map(env_image, env_p, sc[SC_ROT_C], sc[SC_ROT_S],
-                                          dx, dy, dz)
-        return pe, e0, e1, e2
-    if kind == SUN_AND_SKY:
-        e0, e1, e2 = sun_and_sky_eval(sky, dx, dy, dz)
-        return sun_and_sky_pdf(sky, sky_p, dx, dy, dz), e0, e1, e2
-    return 0.0, 0.0, 0.0, 0.0
-
-
-@njit(inline="always")
-def _is_delta(kind):
-    return kind == POINT or kind == SPOT or kind == DIRECTIONAL
-
-
-@njit(inline="always")
-def _next_delta(light_kind, j):
-    """The first delta light after light ``j`` (-1: none)."""
-    for k in range(j + 1, len(light_kind)):
-        if _is_delta(light_kind[k]):
-            return k
-    return -1
-
-
-@njit(inline="always")
-def _spot_falloff(lp, j, c):
-    """Spot ``j``'s falloff at cosine ``c`` from its axis: smoothstep between the cosines
-    of the cutoff and the beam width, 0 outside the cutoff."""
-    span = lp[j, 10] - lp[j, 9]
-    if span <= 0.0:
-        return 1.0 if c >= lp[j, 9] else 0.0
-    t = min(max((c - lp[j, 9]) / span, 0.0), 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
-#: real spherical harmonics of bands 0-2 at unit (x, y, z), and the cosine lobe's band
-#: factors pi, 2 pi / 3, pi / 4 (Ramamoorthi and Hanrahan 2001, "An efficient
-#: representation for irradiance environment maps")
-SH_BANDS = np.array([np.pi] + [2.0 * np.pi / 3.0] * 3 + [np.pi / 4.0] * 5)
-SH_Y00 = 0.5 / math.sqrt(math.pi)
-_SH_Y1 = math.sqrt(3.0 / (4.0 * math.pi))
-_SH_Y2 = math.sqrt(15.0 / (4.0 * math.pi))
-_SH_Y20 = math.sqrt(5.0 / (16.0 * math.pi))
-_SH_Y22 = math.sqrt(15.0 / (16.0 * math.pi))
-
-
-@njit(inline="always")
-def _sh_basis(x, y, z):
-    """The nine real spherical harmonics of bands 0-2 at the unit vector (x, y, z)."""
-    return (SH_Y00, _SH_Y1 * y, _SH_Y1 * z, _SH_Y1 * x, _SH_Y2 * x * y, _SH_Y2 * y * z,
-            _SH_Y20 * (3.0 * z * z - 1.0), _SH_Y2 * x * z, _SH_Y22 * (x * x - y * y))
-
-
-@njit(inline="always")
-def _sh9(x, y, z, c, s):
-    """sum_k c[s, k] Y_k(x, y, z) over the nine harmonics of :func:`_sh_basis`."""
-    b = _sh_basis(x, y, z)
-    return (c[s, 0] * b[0] + c[s, 1] * b[1] + c[s, 2] * b[2] + c[s, 3] * b[3]
-            + c[s, 4] * b[4] + c[s, 5] * b[5] + c[s, 6] * b[6] + c[s, 7] * b[7]
-            + c[s, 8] * b[8])
-
-
-@njit(allocates=True)
-def environment_sh(tb, j, u):
-    """(9,) the irradiance of environment light ``j`` as harmonics of bands 0-2: its
-    luminance projected by the light's own importance samples (``u`` (n, 2) uniforms),
-    times :data:`SH_BANDS`; :func:`_sh9` of them at a normal n is the cosine-weighted
-    radiance over the hemisphere around n, smoothed to three bands."""
-    out = np.zeros(9)
-    n = len(u)
-    for i in range(n):
-        wx, wy, wz, _, l0, l1, l2, pdf, _, _, _, _, _ = sample_light(
-            tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
-            tb.light_faces, tb.light_pdf_area, tb.light_object, tb.obj_flags, tb.emit_light,
-            tb.face_normal, tb.env, tb.env_image, tb.env_p, tb.env_cdf, tb.sky, tb.sky_p,
-            tb.sky_cdf, tb.scalars, j, 0.0, 0.0, 0.0, u[i, 0], u[i, 1])
-        if not pdf > 0.0:
-            continue
-        lum = (LUM_R * l0 + LUM_G * l1 + LUM_B * l2) / (pdf * n)
-        b = _sh_basis(wx, wy, wz)
-        for k in range(9):
-            out[k] += lum * b[k]
-    for k in range(9):
-        out[k] *= SH_BANDS[k]
-    return out
-
-
-@njit(inline="always")
-def _importance(light_kind, light_bounds, light_params, mode, j, px, py, pz, nx, ny, nz):
-    """How much light ``j`` may contribute at p with normal n (n = 0: a point in a
-    medium), up to a common factor: the weight by which :func:`select_light` picks it.
-
-    ``mode`` UNIFORM: 1; POWER: the light's power (pbrt-v4's ``PowerLightSampler``);
-    CONTRIBUTION: a bound on the irradiance at p (pbrt-v4's ``LightBounds::Importance``
-    for one light): intensity / d^2 (d from the light's bounding sphere, at least its
-    radius) times the cosine at the emitter bounded over its emission cone and bounding
-    sphere (0 only where p is behind every triangle of a one-sided emitter, or outside a
-    spot's cutoff: where the light gives nothing) times the bounded cosine at the
-    receiver (at least COS_FLOOR).  Directional lights: irradiance times that cosine;
-    environments: their irradiance at the normal from three bands of spherical harmonics
-    (:func:`environment_sh`, kept in ``light_params[j, 0:9]``), at least COS_FLOOR of pi
-    times their mean radiance (4 pi times it in a medium).
-
-    ``mode + EVERY_DELTA``: the same, delta lights 0 (each is sampled at every vertex,
-    outside the selection)."""
-    lb = light_bounds
-    kind = light_kind[j]
-    if mode >= EVERY_DELTA:
-        if _is_delta(kind):
-            return 0.0
-        mode -= EVERY_DELTA
-    if mode == UNIFORM:
-        return 1.0
-    if mode == POWER:
-        return min(lb[j, LB_PHI], MAX_IMPORTANCE)
-    intensity = lb[j, LB_I]
-    if not intensity > 0.0:
-        return 0.0
-    surface = nx != 0.0 or ny != 0.0 or nz != 0.0
-    if kind == ENVIRONMENT or kind == ENVIRONMENT_MAP or kind == SUN_AND_SKY:
-        if not surface:
-            return 4.0 * intensity
-        return max(_sh9(nx, ny, nz, light_params, j), COS_FLOOR * intensity)
-    if kind == DIRECTIONAL:
-        cos_i = abs(_dot(nx, ny, nz, light_params[j, 3], light_params[j, 4],
-                         light_params[j, 5])) if surface else 1.0
-        return intensity * max(cos_i, COS_FLOOR)
-    if kind == SPOT:  # a point: its falloff exactly
-        wx, wy, wz, ok = _unitize(px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2])
-        falloff = _spot_falloff(light_params, j, _dot(wx, wy, wz, light_params[j, 3],
-                                                      light_params[j, 4], light_params[j, 5]))
-        if not falloff > 0.0:
-            return 0.0
-        return falloff * _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, False)
-    return _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, kind == AREA)
-
-
-@njit
-def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
-    """The contribution bound of :func:`_importance` for row ``j`` of ``lb`` (a light or
-    a node of the light tree): ``intensity`` / d^2 from its bounding sphere, times the
-    emitter's cosine bounded by its emission cone (``cone`` and the row has one) and
-    sphere, times the receiver's cosine bounded the same way."""
-    vx, vy, vz = px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2]
-    r = lb[j, LB_R]
-    d2 = vx * vx + vy * vy + vz * vz
-    wx, wy, wz, ok = _unitize(vx, vy, vz)
-    inside = d2 <= r * r or not ok
-    surface = nx != 0.0 or ny != 0.0 or nz != 0.0
-    # sin and cos of the half-angle the bounding sphere subtends at p
-    sin_b = 1.0 if inside else min(r / math.sqrt(d2), 1.0)
-    cos_b = math.sqrt(max(1.0 - sin_b * sin_b, 0.0))
-    cos_e = 1.0
-    if cone and not inside and lb[j, LB_COS] > -1.0:
-        # cos theta', theta' = max(0, theta_w - theta_o - theta_b): 0 (p behind) below
-        # -1e-6, a margin for rounding
-        cw = min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1], lb[j, LB_AXIS + 2]),
-                     -1.0), 1.0)
-        co = lb[j, LB_COS]
-        c = 1.0
-        if cw < co:  # theta_w > theta_o: cos and sin of theta_w - theta_o
-            sw, so = math.sqrt(max(1.0 - cw * cw, 0.0)), math.sqrt(max(1.0 - co * co, 0.0))
-            cx, sx = cw * co + sw * so, sw * co - cw * so
-            if cx < cos_b:  # beyond theta_b too
-                c = cx * cos_b + sx * sin_b
-        if c < -1e-6:
-            return 0.0
-        cos_e = max(c, COS_FLOOR)
-    cos_i = 1.0
-    if surface and not inside:
-        c = abs(_dot(wx, wy, wz, nx, ny, nz))  # cos(theta_i), theta_i - theta_b bounded
-        s = math.sqrt(max(1.0 - c * c, 0.0))
-        cos_i = 1.0 if c >= cos_b else c * cos_b + s * sin_b
-        cos_i = max(cos_i, COS_FLOOR)
-    d2 = max(d2, r * r, 1e-300)
-    return min(intensity * cos_e * cos_i / d2, MAX_IMPORTANCE)
-
-
-@njit(inline="always")
-def _node_importance(lb, mode, r, px, py, pz, nx, ny, nz):
-    """:func:`_importance` for node ``r`` of the light tree (a row of ``lb`` after the
-    lights'): the number of its lights, their power, or the bound of their merged
-    bounding sphere and emission cone on the sum of their intensities (pbrt-v4's
-    ``LightBounds`` of a ``BVHLightSampler`` node)."""
-    if mode >= EVERY_DELTA:
-        mode -= EVERY_DELTA
-    if mode == UNIFORM:
-        return lb[r, LB_N]
-    if mode == POWER:
-        return min(lb[r, LB_PHI], MAX_IMPORTANCE)
-    if not lb[r, LB_I] > 0.0:
-        return 0.0
-    return _bound_importance(lb, r, lb[r, LB_I], px, py, pz, nx, ny, nz, True)
-
-
-@njit(inline="always")
-def _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny, nz):
-    """The importance of light ``x``, or of node ``x`` of the light tree (x >= lights)."""
-    if x < len(light_kind):
-        return _importance(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx,
-                           ny, nz)
-    return _node_importance(light_bounds, mode, x, px, py, pz, nx, ny, nz)
-
-
-@njit(inline="always")
-def select_light(light_kind, light_bounds, light_params, light_tree, mode, px, py, pz, nx, ny,
-                 nz, u):
-    """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
-    to :func:`_importance`: (light, its probability, the total importance at the top),
-    light -1 (probability 0) where no light can contribute.
-
-    The top is every light outside the light tree (environments, directional lights,
-    a lone area light) and the tree's root (row ``lights`` of ``light_bounds``, if the
-    scene has one): one pass over them, last to first (a reservoir of one, the uniform
-    ``u`` rescaled at each: with two lights ``u < p_0`` picks the first).  From the
-    root the walk goes down ``light_tree`` (parent, child a, child b per row), picking
-    a child in proportion to its importance, as pbrt-v4's ``BVHLightSampler`` does:
-    O(log lights) per vertex."""
-    n_lights = len(light_kind)
-    top = n_lights + 1 if light_bounds.shape[0] > n_lights else n_lights
-    total = 0.0
-    chosen, w = -1, 0.0
-    for x in range(top - 1, -1, -1):  # keep x with probability w_x / total so far
-        if x < n_lights and light_tree[x, 0] >= 0:
-            continue  # under the root
-        wx = _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny, nz)
-        if not wx > 0.0:
-            continue
-        total += wx
-        q = wx / total
-        if u < q:
-            chosen, w = x, wx
-            u = min(u / q, ONE_MINUS_EPS)
-        else:
-            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
-    if not (total > 0.0 and total < np.inf):
-        return -1, 0.0, 0.0
-    pr = w / total
-    x = chosen
-    while x >= n_lights:  # down the tree
-        a, b = light_tree[x, 1], light_tree[x, 2]
-        wa = _weight(light_kind, light_bounds, light_params, mode, a, px, py, pz, nx, ny, nz)
-        wb = _weight(light_kind, light_bounds, light_params, mode, b, px, py, pz, nx, ny, nz)
-        s = wa + wb
-        if not (s > 0.0 and s < np.inf):
-            return -1, 0.0, total
-        q = wa / s
-        if u < q:
-            x, pr = a, pr * q
-            u = min(u / q, ONE_MINUS_EPS)
-        else:
-            x, pr = b, pr * (wb / s)
-            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
-    return x, pr, total
-
-
-@njit(inline="always")
-def selection_pdf(light_kind, light_bounds, light_params, light_tree, mode, j, total, px, py,
-                  pz, nx, ny, nz):
-    """The probability that :func:`select_light` at p (normal n), whose top importances
-    sum to ``total``, picks light ``j`` (0 for ``j < 0``): up the tree from ``j``, the
-    product of each step's share, times the top's share."""
-    if j < 0 or not total > 0.0:
-        return 0.0
-    pr = 1.0
-    x = j
-    parent = light_tree[x, 0]
-    while parent >= 0:
-        a, b = light_tree[parent, 1], light_tree[parent, 2]
-        wa = _weight(light_kind, light_bounds, light_params, mode, a, px, py, pz, nx, ny, nz)
-        wb = _weight(light_kind, light_bounds, light_params, mode, b, px, py, pz, nx, ny, nz)
-        s = wa + wb
-        if not s > 0.0:
-            return 0.0
-        pr *= (wa if x == a else wb) / s
-        x, parent = parent, light_tree[parent, 0]
-    return pr * _weight(light_kind, light_bounds, light_params, mode, x, px, py, pz, nx, ny,
-                        nz) / total
-
-
-@njit(inline="always")
-def sample_light(light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                  light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
-                  env_image, env_p, env_cdf, sky, sky_p, sky_cdf, scalars, j, px, py, pz, u1,
-                  u2):
-    """Light ``j`` sampled from p: (wi xyz, distance, radiance rgb, pdf, delta, face,
-    b0, b1, b2).  ``pdf`` is the density once ``j`` is selected (delta lights: 1; the
-    caller multiplies by the selection probability, :func:`select_light`);
-    ``face >= 0`` marks an area light whose radiance varies over it (radiance returned
-    as 1: the integrator evaluates it at ``face`` and the barycentrics ``b``).
-
-    Takes the scene's arrays one by one (:data:`Tables`): an array taken out of a tuple
-    costs numba two atomic reference counts, which per lane cost more than the work."""
-    if j < 0:  # a scene without lights, or none that can contribute
-        return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
-    kind = light_kind[j]
-    if kind == ENVIRONMENT:  # uniform sphere
-        z = 1.0 - 2.0 * u1
-        r = 2.0 * math.sqrt(max(u1 * (1.0 - u1), 0.0))
-        phi = 2.0 * np.pi * u2
-        e = env
-        return (r * math.cos(phi), r * math.sin(phi), z, INFINITE_DISTANCE, e[0], e[1], e[2],
-                0.25 / np.pi, False, -1, 0.0, 0.0, 0.0)
-    if kind == ENVIRONMENT_MAP:  # a texel by its cdf
-        image, cdf = env_image, env_cdf
-        rot_c, rot_s = scalars[SC_ROT_C], scalars[SC_ROT_S]
-        h, w = image.shape[0], image.shape[1]
-        k = _search_right(cdf, 0, len(cdf), u1)
-        lo = cdf[k - 1] if k > 0 else 0.0
-        pk = env_p[k]
-        du = min(max((u1 - lo) / pk if pk > 0 else 0.5, 0.0), 1.0)
-        row, col = k // w, k % w
-        phi = ((col + du) / w - 0.5) * 2.0 * np.pi
-        theta = (row + u2) / h * np.pi
-        st = math.sin(theta)
-        x, z = st * math.sin(phi), -st * math.cos(phi)
-        wx, wy, wz = rot_c * x + rot_s * z, math.cos(theta), -rot_s * x + rot_c * z
-        pdf, e0, e1, e2 = _environment_map(image, env_p, rot_c, rot_s, wx, wy, wz)
-        if not pdf > 0.0:
-            e0 = e1 = e2 = 0.0
-        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf, False, -1, 0.0, 0.0, 0.0
-    if kind == SUN_AND_SKY:
-        wx, wy, wz = sun_and_sky_sample(sky, sky_p, sky_cdf, u1, u2)
-        pdf = sun_and_sky_pdf(sky, sky_p, wx, wy, wz)
-        e0 = e1 = e2 = 0.0
-        if pdf > 0.0:
-            e0, e1, e2 = sun_and_sky_eval(sky, wx, wy, wz)
-        return wx, wy, wz, INFINITE_DISTANCE, e0, e1, e2, pdf, False, -1, 0.0, 0.0, 0.0
-    lp = light_params
-    if kind == DIRECTIONAL:
-        return (-lp[j, 3], -lp[j, 4], -lp[j, 5], INFINITE_DISTANCE, lp[j, 6], lp[j, 7],
-                lp[j, 8], 1.0, True, -1, 0.0, 0.0, 0.0)
-    if kind != AREA:  # point, or spot with a smoothstep falloff in the cosine
-        dx, dy, dz = lp[j, 0] - px, lp[j, 1] - py, lp[j, 2] - pz
-        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-        wx, wy, wz, ok = _unitize(dx, dy, dz)
-        if not (ok and dist > 0.0):
-            return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, True, -1, 0.0, 0.0, 0.0
-        scale = 1.0 / (dist * dist)
-        if kind == SPOT:
-            scale = scale * _spot_falloff(lp, j, _dot(-wx, -wy, -wz, lp[j, 3], lp[j, 4],
-                                                      lp[j, 5]))
-        return (wx, wy, wz, dist, scale * lp[j, 6], scale * lp[j, 7], scale * lp[j, 8], 1.0,
-                True, -1, 0.0, 0.0, 0.0)
-    # an emissive object: a triangle by area, a uniform point on it
-    a, b = light_first[j], light_first[j + 1]
-    cdf = light_cdf
-    t = _search_right(cdf, a, b, u1)
-    lo = cdf[t - 1] if t > a else 0.0
-    width = cdf[t] - lo
-    u0 = min(max((u1 - lo) / width if width > 0 else 0.5, 0.0), 1.0)
-    su = math.sqrt(max(u0, 0.0))
-    b1 = 1.0 - su
-    b2 = u2 * su
-    b0 = 1.0 - b1 - b2
-    c = light_corners
-    xx = b0 * c[t, 0, 0] + b1 * c[t, 1, 0] + b2 * c[t, 2, 0]
-    xy = b0 * c[t, 0, 1] + b1 * c[t, 1, 1] + b2 * c[t, 2, 1]
-    xz = b0 * c[t, 0, 2] + b1 * c[t, 1, 2] + b2 * c[t, 2, 2]
-    dx, dy, dz = xx - px, xy - py, xz - pz
-    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-    wx, wy, wz, ok = _unitize(dx, dy, dz)
-    f = light_faces[t]
-    fn = face_normal
-    gx, gy, gz = fn[f, 0], fn[f, 1], fn[f, 2]
-    cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
-    if not (ok and dist > 0.0 and cos_l > 1e-12):
-        return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, False, -1, 0.0, 0.0, 0.0
-    pdf = dist * dist / cos_l * light_pdf_area[j]
-    obj = light_object[j]
-    if not (obj_flags[obj] & EMIT_CONST):
-        return wx, wy, wz, dist, 1.0, 1.0, 1.0, pdf, False, f, b0, b1, b2
-    if _dot(-wx, -wy, -wz, gx, gy, gz) > 0.0:  # emitters light their front side
-        e = emit_light
-        return wx, wy, wz, dist, e[obj, 0], e[obj, 1], e[obj, 2], pdf, False, -1, 0.0, 0.0, 0.0
-    return wx, wy, wz, dist, 0.0, 0.0, 0.0, pdf, False, -1, 0.0, 0.0, 0.0
-
-
-@njit(allocates=True)
+# ------------------------------------------------- the lights, for tests and set-up
 def sample_lights(tb, p, u):
-    """:func:`sample_light` for points ``p`` (n, 3) in a medium (no normal) with
-    uniforms ``u`` (n, 3): the light chosen by ``u[:, 0]`` as :func:`bounce` chooses it,
-    sampled with ``u[:, 1:]``.
-
-    Returns ``wi`` (n, 3), distance (n,), radiance (n, 3), pdf (n,) (selection
-    included), delta (n,) bool and the varying-emission face (n,) (-1: none)."""
-    n = len(p)
-    wi, dist, li, pdf = np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n)
-    delta, face = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.int64)
-    mode = int(tb.scalars[SC_SELECT])
-    for i in range(n):
-        j, sel, _ = select_light(tb.light_kind, tb.light_bounds, tb.light_params, tb.light_tree,
-                                 mode, p[i, 0], p[i, 1], p[i, 2], 0.0, 0.0, 0.0, u[i, 0])
-        (wi[i, 0], wi[i, 1], wi[i, 2], dist[i], li[i, 0], li[i, 1], li[i, 2], pdf[i], delta[i],
-         face[i], _, _, _) = sample_light(
-            tb.light_kind, tb.light_params, tb.light_first, tb.light_cdf, tb.light_corners,
-            tb.light_faces, tb.light_pdf_area, tb.light_object, tb.obj_flags, tb.emit_light,
-            tb.face_normal, tb.env, tb.env_image, tb.env_p, tb.env_cdf, tb.sky, tb.sky_p,
-            tb.sky_cdf, tb.scalars, j, p[i, 0], p[i, 1], p[i, 2], u[i, 1], u[i, 2])
-        pdf[i] *= sel
-    return wi, dist, li, pdf, delta, face
+    """:func:`render.light_sampling.sample_lights` of the lights of tables ``tb``
+    (points ``p`` (n, 3) in a medium, uniforms ``u`` (n, 3))."""
+    sc = tb.scalars
+    return ls.sample_lights(tb.lights, tb.light_tri, tb.env_image, tb.env_dist, tb.sky,
+                            tb.sky_dist, int(sc[SC_LIGHTS]), int(sc[SC_SELECT]), sc[SC_ROT_C],
+                            sc[SC_ROT_S], np.asarray(p, dtype=np.float64),
+                            np.asarray(u, dtype=np.float64))
 
 
-@njit(allocates=True)
 def selection(tb, p, nrm):
-    """(n, lights) the probability that next-event estimation at points ``p`` (n, 3)
-    with normals ``nrm`` (n, 3; 0: in a medium) picks each light (:func:`select_light`)."""
-    n, n_lights = len(p), len(tb.light_kind)
-    out = np.zeros((n, n_lights))
-    mode = int(tb.scalars[SC_SELECT])
-    for i in range(n):
-        _, _, total = select_light(tb.light_kind, tb.light_bounds, tb.light_params, tb.light_tree,
-                                   mode, p[i, 0], p[i, 1], p[i, 2], nrm[i, 0], nrm[i, 1],
-                                   nrm[i, 2], 0.5)
-        for j in range(n_lights):
-            out[i, j] = selection_pdf(tb.light_kind, tb.light_bounds, tb.light_params,
-                                      tb.light_tree, mode, j, total, p[i, 0], p[i, 1], p[i, 2],
-                                      nrm[i, 0], nrm[i, 1], nrm[i, 2])
-    return out
+    """(n, lights) the probability that next-event estimation at points ``p`` with
+    normals ``nrm`` (0: in a medium) picks each light of tables ``tb``."""
+    sc = tb.scalars
+    return ls.selection(tb.lights, int(sc[SC_LIGHTS]), int(sc[SC_SELECT]),
+                        np.asarray(p, dtype=np.float64), np.asarray(nrm, dtype=np.float64))
 
 
-@njit(allocates=True)
 def escaped(tb, d):
-    """What a path sees along unit directions ``d`` (n, 3) that leave the scene: the
-    pdf with which the environment, once selected, samples them (n,) and the radiance
-    (n, 3)."""
-    n = len(d)
-    pdf, li = np.empty(n), np.empty((n, 3))
-    sc, env, env_image, env_p, sky, sky_p = (tb.scalars, tb.env, tb.env_image, tb.env_p, tb.sky,
-                                             tb.sky_p)
-    for i in range(n):
-        pdf[i], li[i, 0], li[i, 1], li[i, 2] = _environment(sc, env, env_image, env_p, sky, sky_p,
-                                                            d[i, 0], d[i, 1], d[i, 2])
-    return pdf, li
+    """What rays along unit directions ``d`` (n, 3) that leave the scene of tables
+    ``tb`` see: the environment's sampling pdf (n,) and radiance (n, 3)."""
+    sc = tb.scalars
+    return ls.escaped(tb.lights, int(sc[SC_ENV_LIGHT]), tb.env_image, tb.env_dist, tb.sky,
+                      tb.sky_dist, sc[SC_ROT_C], sc[SC_ROT_S], np.asarray(d, dtype=np.float64))
 
 
 # ------------------------------------------------------- the stack of closed objects
@@ -827,24 +358,21 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
     want_aov = sc[SC_AOV] != 0.0
     may_bind = sc[SC_BIND] != 0.0
     mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
+    n_lights, rot_c, rot_s = int(sc[SC_LIGHTS]), sc[SC_ROT_C], sc[SC_ROT_S]
+    lights, light_tri, env_image, env_dist = tb.lights, tb.light_tri, tb.env_image, tb.env_dist
+    sky, sky_dist = tb.sky, tb.sky_dist
     n_every = 0  # delta lights sampled at every vertex
     if mode >= EVERY_DELTA:
-        for j in range(len(tb.light_kind)):
-            n_every += 1 if _is_delta(tb.light_kind[j]) else 0
+        for j in range(n_lights):
+            n_every += 1 if is_delta(int(lights[j, L_KIND])) else 0
     n_const = 2 * len(tb.obj_flags)
     nest = cso.shape[1]
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
-    light_bounds, light_tree = tb.light_bounds, tb.light_tree
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
     medium, phase, face_offset = tb.medium, tb.phase, tb.face_offset
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
-    light_kind, light_params, light_first = tb.light_kind, tb.light_params, tb.light_first
-    light_cdf, light_corners, light_faces = tb.light_cdf, tb.light_corners, tb.light_faces
-    light_pdf_area, light_object, emit_light = tb.light_pdf_area, tb.light_object, tb.emit_light
-    env, env_image, env_p, env_cdf = tb.env, tb.env_image, tb.env_p, tb.env_cdf
-    sky, sky_p, sky_cdf = tb.sky, tb.sky_p, tb.sky_cdf
     n_park = 0
     n_shadow = 0
     rays = 0
@@ -948,11 +476,12 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
                 can_continue, is_null, encloses, front = True, False, False, True
             elif f < 0:
                 # ---- escaped: the environment, weighted against light sampling
-                pe, e0, e1, e2 = _environment(sc, env, env_image, env_p, sky, sky_p, dx, dy, dz)
+                pe, e0, e1, e2 = environment_radiance(lights, env_light, env_image, env_dist,
+                                                      sky, sky_dist, rot_c, rot_s, dx, dy, dz)
                 if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
                     if not prev_delta:
-                        pe *= selection_pdf(light_kind, light_bounds, light_params, light_tree,
-                                            mode, env_light, prev_sum, vx, vy, vz, vnx, vny, vnz)
+                        pe *= selection_pdf(lights, n_lights, mode, env_light, prev_sum, vx, vy,
+                                            vz, vnx, vny, vnz)
                     w = (1.0 if prev_delta else _power(prev_pdf, pe)) / mis
                     L[lane, 0] += b0 * e0 * w
                     L[lane, 1] += b1 * e1 * w
@@ -1000,9 +529,8 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
                     jl = face_light[f]
                     cos_l = abs(g_wo)
                     if not prev_delta and jl >= 0 and cos_l > 0.0:
-                        pl = light_pdf_area[jl] * dist_v * dist_v / cos_l * selection_pdf(
-                            light_kind, light_bounds, light_params, light_tree, mode, jl,
-                            prev_sum, vx, vy, vz, vnx, vny, vnz)
+                        pl = lights[jl, L_PDF_AREA] * dist_v * dist_v / cos_l * selection_pdf(
+                            lights, n_lights, mode, jl, prev_sum, vx, vy, vz, vnx, vny, vnz)
                         w = _power(prev_pdf, pl) / mis
                     L[lane, 0] += b0 * e0 * w
                     L[lane, 1] += b1 * e1 * w
@@ -1042,16 +570,14 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
                 ul1, ul2 = sample_pair(v1, ph, idx, pair0 + P_LIGHT, kind)
             for pick in range(1 + n_every if can_continue else 0):
                 if pick == 0:
-                    j, sel, total = select_light(light_kind, light_bounds, light_params,
-                                                 light_tree, mode, px, py, pz, nx, ny, nz,
+                    j, sel, total = select_light(lights, n_lights, mode, px, py, pz, nx, ny, nz,
                                                  u_choice)  # -1: none
                 else:
-                    jd = _next_delta(light_kind, jd)
+                    jd = next_delta(lights, n_lights, jd)
                     j, sel = jd, 1.0
                 (lx, ly, lz, ldist, l0, l1, l2, lpdf, ldelta, lface, q0, q1, q2) = sample_light(
-                    light_kind, light_params, light_first, light_cdf, light_corners, light_faces,
-                    light_pdf_area, light_object, obj_flags, emit_light, face_normal, env,
-                    env_image, env_p, env_cdf, sky, sky_p, sky_cdf, sc, j, px, py, pz, ul1, ul2)
+                    lights, light_tri, env_image, env_dist, sky, sky_dist, rot_c, rot_s, j, px,
+                    py, pz, ul1, ul2)
                 lpdf *= sel
                 if not lpdf > 0.0:
                     continue

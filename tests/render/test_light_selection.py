@@ -9,8 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from displacement.surfaces import UnitSquare
+from render import light_sampling as LS
 from render.lights import ConstantEnvironment, DirectionalLight, PointLight, SpotLight
-from render.path import sample_lights, selection
+from render.path import SC_LIGHTS, sample_lights, selection
 from render.scene import RenderSettings, SceneObject, emissive_material, make_transform
 from render.testing import light_tables
 
@@ -176,13 +177,18 @@ def test_every_selection_renders_the_same_image_in_expectation():
         assert diff.std() > 0
 
 
+def _lights(tb) -> int:
+    """The number of lights of tables ``tb`` (the light tree's nodes follow them)."""
+    return int(tb.scalars[SC_LIGHTS])
+
+
 # ---------------------------------------------------------------- environments
 def _sh_irradiance(tb, j, nrm):
     """The harmonics' irradiance of environment ``j`` at unit normals ``nrm`` (n, 3)."""
-    from render.path import SH_Y00
+    from render.light_sampling import SH_Y00
 
     x, y, z = nrm.T
-    c = tb.light_params[j, 0:9]
+    c = tb.lights[j, LS.L_SH:LS.L_SH + 9]
     y1, y2 = np.sqrt(3 / (4 * np.pi)), np.sqrt(15 / (4 * np.pi))
     basis = [np.full_like(x, SH_Y00), y1 * y, y1 * z, y1 * x, y2 * x * y, y2 * y * z,
              np.sqrt(5 / (16 * np.pi)) * (3 * z * z - 1), y2 * x * z,
@@ -198,7 +204,7 @@ def _normals(n, rng):
 def test_a_constant_environment_gives_pi_l_from_every_side(rng):
     tb = light_tables([ConstantEnvironment(0.1)], [_quad(0.0)], selection="contribution")
     j = 0
-    c = tb.light_params[j, 0:9]
+    c = tb.lights[j, LS.L_SH:LS.L_SH + 9]
     assert c[0] * np.sqrt(0.25 / np.pi) == pytest.approx(np.pi * 0.1, rel=1e-9)
     assert np.abs(c[1:]).max() < 1e-3 * c[0]
     e = _sh_irradiance(tb, j, _normals(200, rng))
@@ -251,9 +257,9 @@ def test_a_sun_is_chosen_more_where_the_normal_faces_it():
 
 # ---------------------------------------------------------------- the light tree
 def _row(c, r, axis, cos, i):
-    from render import path as K
+    from render import light_sampling as K
 
-    row = np.zeros(K.NLB)
+    row = np.zeros(K.NL)
     row[K.LB_C:K.LB_C + 3], row[K.LB_R] = c, r
     row[K.LB_AXIS:K.LB_AXIS + 3] = axis / np.linalg.norm(axis)
     row[K.LB_COS], row[K.LB_I], row[K.LB_PHI], row[K.LB_N] = cos, i, 2 * i, 1
@@ -269,8 +275,8 @@ vec = st.tuples(*[st.floats(-10, 10, allow_nan=False)] * 3)
 def test_a_node_bounds_both_children(ca, cb, ra, rb, xa, xb, cos_a, cos_b):
     """The merged sphere holds both spheres; the merged cone holds both cones (or is
     none, -1, when it would cover the sphere or a child has none); sums add up."""
-    from render import path as K
-    from render.integrator import _merge_bounds
+    from render import light_sampling as K
+    from render.light_sampling import _merge_bounds
 
     xa, xb = np.array(xa) + [0, 0, 1e-3], np.array(xb) + [0, 1e-3, 0]
     a = _row(np.array(ca), ra, xa, cos_a, 1.0)
@@ -292,12 +298,13 @@ def test_a_node_bounds_both_children(ca, cb, ra, rb, xa, xb, cos_a, cos_b):
 def test_the_tree_holds_every_area_light_once():
     """100 lamps: 99 nodes, the root first after the lights, every lamp a leaf reached
     from the root, every node's count the number of lamps below it."""
-    from render import path as K
+    from render import light_sampling as K
 
     lamps = [_quad(float(x), size=0.05) for x in np.linspace(-5, 5, 100)]
     tb = light_tables([ConstantEnvironment(0.1)], lamps, selection="contribution")
-    n = len(tb.light_kind)
-    tree, lb = tb.light_tree, tb.light_bounds
+    n = _lights(tb)
+    lb = tb.lights
+    tree = lb[:, K.L_PARENT:K.L_B + 1].astype(np.int64)
     assert len(tree) == n + 99 and tree[n, 0] == -1 and tree[0, 0] == -1  # env at the top
     seen, stack = [], [n]
     while stack:
@@ -330,20 +337,22 @@ def test_an_emitter_of_many_triangles_is_sampled_in_groups():
     from render.lights import GROUP_FACES, GROUPS
 
     tb = light_tables([], [_tube()], selection="contribution")
-    n = len(tb.light_kind)
+    n = _lights(tb)
     assert n == GROUPS
     tube = np.flatnonzero(tb.face_object == 0)
     groups = tb.face_light[tube]
     assert np.all(groups >= 0) and sorted(np.unique(groups)) == list(range(n))
+    tri = tb.light_tri
     for j in range(n):
-        faces = tb.light_faces[tb.light_first[j]:tb.light_first[j + 1]]
+        faces = tri[int(tb.lights[j, LS.L_TRI]):int(tb.lights[j, LS.L_TRI_END]), LS.T_FACE]
+        faces = faces.astype(np.int64)
         assert len(faces) >= GROUP_FACES and np.all(tb.face_light[faces] == j)
-    c = tb.light_corners
+    c = tri[:, LS.T_CORNERS:LS.T_CORNERS + 9].reshape(-1, 3, 3)
     area = 0.5 * np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1).sum()
-    assert np.sum(1.0 / tb.light_pdf_area) == pytest.approx(area, rel=1e-12)
+    assert np.sum(1.0 / tb.lights[:n, LS.L_PDF_AREA]) == pytest.approx(area, rel=1e-12)
     p = np.array([[-5.5, 0.0, 0.0]])
     pr = selection(tb, p, np.array([[0.0, 1.0, 0.0]]))[0]
-    centre = tb.light_bounds[:n, 0]  # the lights (the tree's nodes follow)
+    centre = tb.lights[:n, LS.LB_C]  # the lights (the tree's nodes follow)
     assert abs(centre[np.argmax(pr)] + 5.5) < 1.5  # the tube is cut into 1.5 lengths
     assert np.all(pr[centre > 3.0] < pr.max() / 20)
     assert pr.sum() == pytest.approx(1.0, rel=1e-12)
@@ -351,4 +360,4 @@ def test_an_emitter_of_many_triangles_is_sampled_in_groups():
 
 def test_a_small_emitter_stays_one_light():
     tb = light_tables([], [_quad(0.0)], selection="contribution")
-    assert len(tb.light_kind) == 1
+    assert _lights(tb) == 1

@@ -16,7 +16,7 @@ from render import sampler as S
 def _unscrambled(i: int) -> tuple[float, float]:
     """Sobol's first two dimensions at index ``i`` from the module's tables."""
     x = int(f"{i:032b}"[::-1], 2)
-    t = S._V1
+    t = S.SOBOL_TABLE
     y = t[0, i & 255] ^ t[1, (i >> 8) & 255] ^ t[2, (i >> 16) & 255] ^ t[3, i >> 24]
     return x / 2**32, int(y) / 2**32
 
@@ -80,19 +80,20 @@ def test_a_pixels_mean_converges_faster_than_independent_sampling():
     assert means.std() < independent / 10
 
 
-def test_segment_values_are_the_pairs_of_their_columns():
-    """``segment_values`` fills the nine columns from the pairs of SEGMENT_COLUMNS, lane
-    ``i`` being the sample of ``lane[i]``; nothing is left unwritten."""
+def test_the_kernels_draw_is_the_pair_value():
+    """What the path kernel draws (``sample_pair`` at the pixel's hash) is
+    ``pair_values``' value, for each pair of a path segment, and a segment's five pairs
+    are distinct (each decides its own choice)."""
+    pairs = (S.P_LIGHT, S.P_BSDF, S.P_CHOICE, S.P_FLIGHT, S.P_CUTOUT)
+    assert sorted(pairs) == list(range(S.PAIRS_PER_SEGMENT))
     pixel, index = np.array([3, 7, 7, 11]), np.array([0, 5, 6, 1])
-    lane = np.array([2, 0, 3])
-    u = np.full((3, 9), np.nan)
-    S.segment_values(u, 3, lane, pixel, index, 12, 4)
-    assert np.isfinite(u).all()
-    for g, (c0, c1) in enumerate(S.SEGMENT_COLUMNS):
-        want = S.pair_values(pixel[lane], index[lane], 12 + g, 4)
-        assert np.array_equal(u[:, c0], want[:, 0])
-        if c1 >= 0:
-            assert np.array_equal(u[:, c1], want[:, 1])
+    for kind in S.SAMPLERS.values():
+        for g in pairs:
+            pair = S.FIRST_SEGMENT_PAIR + 3 * S.PAIRS_PER_SEGMENT + g
+            want = S.pair_values(pixel, index, pair, 4, kind)
+            got = [S.sample_pair(S.SOBOL_TABLE, S.pixel_hash(4, p), i, pair, kind)
+                   for p, i in zip(pixel, index, strict=True)]
+            assert np.array_equal(np.array(got), want)
 
 
 def test_extreme_indices_pixels_and_seeds():
