@@ -562,7 +562,7 @@ class Integrator:
             m, ns = kern.trace(self.scene_handle, tables, m, resume, o, d, pixel, index, seed,
                                kind, SOBOL_TABLE, *lanes, lane_row, params, bf, bslot, L, alpha,
                                aov, *parked, *buf.shadows[0], kern.scratch(tables), buf.es,
-                               buf.cso, buf.csior, counts)
+                               buf.cso, buf.csior, buf.lw, counts)
             if ns:
                 self._shadows(ns, buf, (pixel, index, seed, kind), L, counts)
             if not m:
@@ -605,7 +605,7 @@ class Integrator:
                                   shadows=(shadow_set(), shadow_set()),
                                   es=embree.new_scratch(),
                                   cso=np.full((1, nest), -1, dtype=np.int64),
-                                  csior=np.ones((1, nest)))
+                                  csior=np.ones((1, nest)), lw=np.empty(len(self.tables.lights)))
             self._local.buffers = buf
         return buf
 

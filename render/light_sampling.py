@@ -32,6 +32,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from render.df._kernel_common import unitize
 from render.jit import njit
 from render.lights import (
     INFINITE_DISTANCE,
@@ -106,17 +107,6 @@ _SH_Y22 = math.sqrt(15.0 / (16.0 * math.pi))
 @njit(inline="always")
 def _dot(ax, ay, az, bx, by, bz):
     return ax * bx + ay * by + az * bz
-
-
-@njit
-def _unitize(x, y, z):
-    """A unit vector robust to under- and overflow: (ux, uy, uz, valid)."""
-    scale = max(max(abs(x), abs(y)), abs(z))
-    if not scale > 1e-300:
-        return 0.0, 0.0, 0.0, False
-    wx, wy, wz = x / scale, y / scale, z / scale
-    length = math.sqrt(wx * wx + wy * wy + wz * wz)
-    return wx / length, wy / length, wz / length, True
 
 
 @njit
@@ -251,7 +241,7 @@ def _importance(lights, mode, j, px, py, pz, nx, ny, nz):
                          lights[j, L_DIR + 2])) if surface else 1.0
         return intensity * max(cos_i, COS_FLOOR)
     if kind == SPOT:  # a point: its falloff exactly
-        wx, wy, wz, ok = _unitize(px - lights[j, L_POS], py - lights[j, L_POS + 1],
+        wx, wy, wz, ok = unitize(px - lights[j, L_POS], py - lights[j, L_POS + 1],
                                   pz - lights[j, L_POS + 2])
         falloff = _spot_falloff(lights, j, _dot(wx, wy, wz, lights[j, L_DIR],
                                                 lights[j, L_DIR + 1], lights[j, L_DIR + 2]))
@@ -270,7 +260,7 @@ def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
     vx, vy, vz = px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2]
     r = lb[j, LB_R]
     d2 = vx * vx + vy * vy + vz * vz
-    wx, wy, wz, ok = _unitize(vx, vy, vz)
+    wx, wy, wz, ok = unitize(vx, vy, vz)
     inside = d2 <= r * r or not ok
     surface = nx != 0.0 or ny != 0.0 or nz != 0.0
     # sin and cos of the half-angle the bounding sphere subtends at p
@@ -322,36 +312,40 @@ def _weight(lights, n_lights, mode, x, px, py, pz, nx, ny, nz):
 
 
 @njit(inline="always")
-def select_light(lights, n_lights, mode, px, py, pz, nx, ny, nz, u):
+def select_light(lights, n_lights, mode, px, py, pz, nx, ny, nz, u, lw):
     """One light for next-event estimation at p (normal n, 0 in a medium), in proportion
     to :func:`_importance`: (light, its probability, the total importance at the top),
     light -1 (probability 0) where no light can contribute.
 
     The top is every light outside the light tree and the tree's root (row
-    ``n_lights``, if the scene has a tree): one pass over them, last to first (a
-    reservoir of one, the uniform ``u`` rescaled at each: with two lights ``u < p_0``
-    picks the first).  From the root the walk goes down the tree, picking a child in
-    proportion to its importance, as pbrt-v4's ``BVHLightSampler`` does: O(log lights)
-    per vertex."""
+    ``n_lights``, if the scene has a tree): their weights (kept in the scratch ``lw``,
+    at least ``n_lights + 1`` long) are summed, and ``u`` times the sum picks one by
+    their running sum (so ``u < p_0`` picks the first).  From the root the walk goes
+    down the tree, picking a child in proportion to its importance with ``u`` rescaled,
+    as pbrt-v4's ``BVHLightSampler`` does: O(log lights) per vertex."""
     top = n_lights + 1 if lights.shape[0] > n_lights else n_lights
     total = 0.0
-    chosen, w = -1, 0.0
-    for x in range(top - 1, -1, -1):  # keep x with probability w_x / total so far
-        if x < n_lights and lights[x, L_PARENT] >= 0.0:
-            continue  # under the root
-        wx = _weight(lights, n_lights, mode, x, px, py, pz, nx, ny, nz)
-        if not wx > 0.0:
-            continue
-        total += wx
-        q = wx / total
-        if u < q:
-            chosen, w = x, wx
-            u = min(u / q, ONE_MINUS_EPS)
-        else:
-            u = min((u - q) / (1.0 - q), ONE_MINUS_EPS) if q < 1.0 else 0.0
+    for x in range(top):
+        w = 0.0
+        if x >= n_lights or lights[x, L_PARENT] < 0.0:  # not under the root
+            w = _weight(lights, n_lights, mode, x, px, py, pz, nx, ny, nz)
+            if not w > 0.0:
+                w = 0.0
+        lw[x] = w
+        total += w
     if not (total > 0.0 and total < np.inf):
         return -1, 0.0, 0.0
+    target = u * total
+    chosen, below = -1, 0.0
+    for x in range(top):
+        if lw[x] > 0.0:
+            chosen = x
+            if target < below + lw[x]:
+                break
+            below += lw[x]
+    w = lw[chosen]
     pr = w / total
+    u = min(max((target - below) / w, 0.0), ONE_MINUS_EPS)
     x = chosen
     while x >= n_lights:  # down the tree
         a, b = int(lights[x, L_A]), int(lights[x, L_B])
@@ -441,7 +435,7 @@ def sample_light(lights, light_tri, env_image, env_dist, sky, sky_dist, rot_c, r
     if kind != AREA:  # point, or spot with a smoothstep falloff in the cosine
         dx, dy, dz = lights[j, L_POS] - px, lights[j, L_POS + 1] - py, lights[j, L_POS + 2] - pz
         dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-        wx, wy, wz, ok = _unitize(dx, dy, dz)
+        wx, wy, wz, ok = unitize(dx, dy, dz)
         if not (ok and dist > 0.0):
             return wx, wy, wz, dist, 0.0, 0.0, 0.0, 0.0, True, -1, 0.0, 0.0, 0.0
         scale = 1.0 / (dist * dist)
@@ -467,7 +461,7 @@ def sample_light(lights, light_tri, env_image, env_dist, sky, sky_dist, rot_c, r
     xz = b0 * light_tri[t, c + 2] + b1 * light_tri[t, c + 5] + b2 * light_tri[t, c + 8]
     dx, dy, dz = xx - px, xy - py, xz - pz
     dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-    wx, wy, wz, ok = _unitize(dx, dy, dz)
+    wx, wy, wz, ok = unitize(dx, dy, dz)
     gx, gy, gz = light_tri[t, T_NORMAL], light_tri[t, T_NORMAL + 1], light_tri[t, T_NORMAL + 2]
     cos_l = abs(_dot(wx, wy, wz, gx, gy, gz))
     if not (ok and dist > 0.0 and cos_l > 1e-12):
@@ -494,9 +488,10 @@ def sample_lights(lights, light_tri, env_image, env_dist, sky, sky_dist, n_light
     n = len(p)
     wi, dist, li, pdf = np.empty((n, 3)), np.empty(n), np.empty((n, 3)), np.empty(n)
     delta, face = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.int64)
+    lw = np.empty(len(lights))
     for i in range(n):
         j, sel, _ = select_light(lights, n_lights, mode, p[i, 0], p[i, 1], p[i, 2], 0.0, 0.0,
-                                 0.0, u[i, 0])
+                                 0.0, u[i, 0], lw)
         (wi[i, 0], wi[i, 1], wi[i, 2], dist[i], li[i, 0], li[i, 1], li[i, 2], pdf[i], delta[i],
          face[i], _, _, _) = sample_light(lights, light_tri, env_image, env_dist, sky, sky_dist,
                                           rot_c, rot_s, j, p[i, 0], p[i, 1], p[i, 2], u[i, 1],
@@ -511,9 +506,10 @@ def selection(lights, n_lights, mode, p, nrm):
     with normals ``nrm`` (n, 3; 0: in a medium) picks each light (:func:`select_light`)."""
     n = len(p)
     out = np.zeros((n, n_lights))
+    lw = np.empty(len(lights))
     for i in range(n):
         _, _, total = select_light(lights, n_lights, mode, p[i, 0], p[i, 1], p[i, 2], nrm[i, 0],
-                                   nrm[i, 1], nrm[i, 2], 0.5)
+                                   nrm[i, 1], nrm[i, 2], 0.5, lw)
         for j in range(n_lights):
             out[i, j] = selection_pdf(lights, n_lights, mode, j, total, p[i, 0], p[i, 1],
                                       p[i, 2], nrm[i, 0], nrm[i, 1], nrm[i, 2])

@@ -36,6 +36,7 @@ import numpy as np
 from render import embree, interpreter
 from render import light_sampling as ls
 from render.bsdf import Lobe
+from render.df._kernel_common import unitize
 from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
 from render.df.anisotropic_vdf import sample as _phase_sample
 from render.jit import njit
@@ -177,35 +178,14 @@ def _dot(ax, ay, az, bx, by, bz):
     return ax * bx + ay * by + az * bz
 
 
-@njit
-def _fast_unit(x, y, z):
-    """(ux, uy, uz, valid); vectors shorter than 1e-150 are left as they are."""
-    length = math.sqrt(x * x + y * y + z * z)
-    if length > 1e-150:
-        return x / length, y / length, z / length, True
-    return x, y, z, False
-
-
-@njit
-def _unitize(x, y, z):
-    """A unit vector robust to under- and overflow: (ux, uy, uz, valid)."""
-    scale = max(max(abs(x), abs(y)), abs(z))
-    if not scale > 1e-300:
-        return 0.0, 0.0, 0.0, False
-    wx, wy, wz = x / scale, y / scale, z / scale
-    length = math.sqrt(wx * wx + wy * wy + wz * wz)
-    return wx / length, wy / length, wz / length, True
-
-
 @njit(inline="always")
 def _frame(nx, ny, nz, tx, ty, tz):
     """The shading frame's (s, t) from a unit normal and a tangent (Gram–Schmidt; Duff
     et al.'s frame where the tangent is missing or parallel)."""
     c = _dot(tx, ty, tz, nx, ny, nz)
     px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
-    sx, sy, sz, ok = _unitize(px, py, pz)
-    ok = ok and math.sqrt(px * px + py * py + pz * pz) > 1e-8 * math.sqrt(
-        tx * tx + ty * ty + tz * tz)
+    sx, sy, sz, ok = unitize(px, py, pz)
+    ok = ok and px * px + py * py + pz * pz > 1e-16 * (tx * tx + ty * ty + tz * tz)
     if not ok:
         sign = 1.0 if nz >= 0.0 else -1.0
         a = -1.0 / (sign + nz)
@@ -272,19 +252,19 @@ def _attributes(packed, faces, face_normal, f, w1, w2):
     px = w0 * tp[v0, 0] + w1 * tp[v1, 0] + w2 * tp[v2, 0]
     py = w0 * tp[v0, 1] + w1 * tp[v1, 1] + w2 * tp[v2, 1]
     pz = w0 * tp[v0, 2] + w1 * tp[v1, 2] + w2 * tp[v2, 2]
-    nx, ny, nz, ok = _fast_unit(
+    nx, ny, nz, ok = unitize(
         w0 * tp[v0, 3] + w1 * tp[v1, 3] + w2 * tp[v2, 3],
         w0 * tp[v0, 4] + w1 * tp[v1, 4] + w2 * tp[v2, 4],
         w0 * tp[v0, 5] + w1 * tp[v1, 5] + w2 * tp[v2, 5],
     )
     if not ok:
         nx, ny, nz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
-    tx, ty, tz, _ = _fast_unit(
+    tx, ty, tz, _ = unitize(
         w0 * tp[v0, 6] + w1 * tp[v1, 6] + w2 * tp[v2, 6],
         w0 * tp[v0, 7] + w1 * tp[v1, 7] + w2 * tp[v2, 7],
         w0 * tp[v0, 8] + w1 * tp[v1, 8] + w2 * tp[v2, 8],
     )
-    bx, by, bz, _ = _fast_unit(
+    bx, by, bz, _ = unitize(
         w0 * tp[v0, 9] + w1 * tp[v1, 9] + w2 * tp[v2, 9],
         w0 * tp[v0, 10] + w1 * tp[v1, 10] + w2 * tp[v2, 10],
         w0 * tp[v0, 11] + w1 * tp[v1, 11] + w2 * tp[v2, 11],
@@ -334,7 +314,7 @@ def _traced(counts, t0, rays):
 @njit
 def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, sior,
           lane_row, params, bf, bslot, L, alpha, aov, plf, pli, pso, psior, sf, si, sso,
-          ssior, ws, es, cso, csior, counts):
+          ssior, ws, es, cso, csior, lw, counts):
     """Trace the paths of lanes ``0 .. n-1`` to their end, or until a path hits an object
     that numpy must shade first (:func:`_needs_binding`): such a lane is *parked*, its
     state and hit written to row ``p`` of ``plf``, ``pli``, ``pso``, ``psior``.
@@ -349,7 +329,8 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
 
     What each path sees is added to ``L[lane]``, its alpha and AOVs (first hits) to
     ``alpha`` and ``aov``.  Scratch: ``ws`` (the interpreter's), ``es`` (Embree's ray
-    record), ``cso``/``csior`` (a lane's stack of closed objects, one row).  Returns
+    record), ``cso``/``csior`` (a lane's stack of closed objects, one row), ``lw`` (the
+    lights' weights, a row of ``tb.lights`` long).  Returns
     ``(parked lanes, parked shadow records)``."""
     sc = tb.scalars
     eps = sc[SC_EPS]
@@ -571,7 +552,7 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
             for pick in range(1 + n_every if can_continue else 0):
                 if pick == 0:
                     j, sel, total = select_light(lights, n_lights, mode, px, py, pz, nx, ny, nz,
-                                                 u_choice)  # -1: none
+                                                 u_choice, lw)  # -1: none
                 else:
                     jd = next_delta(lights, n_lights, jd)
                     j, sel = jd, 1.0
@@ -711,7 +692,7 @@ def _shadow_record(eps, sf, si, sso, ssior, r, cso, csior, nstk, lane, segment, 
     if finite:  # aim from the offset origin at the light point itself
         tx, ty, tz = px + lx * ldist, py + ly * ldist, pz + lz * ldist
         ex, ey, ez = tx - qx, ty - qy, tz - qz
-        ux, uy, uz, ok = _unitize(ex, ey, ez)
+        ux, uy, uz, ok = unitize(ex, ey, ez)
         if not ok:
             ux, uy, uz = lx, ly, lz
         sdist = math.sqrt(ex * ex + ey * ey + ez * ez)

@@ -121,9 +121,14 @@ def dot3(ax, ay, az, bx, by, bz):
 def unitize(x, y, z):
     """:func:`render.numerics.unitize` of one vector -> ``(ux, uy, uz, valid)``.
 
-    Scaled by the largest component first (no overflow or underflow of the squared
+    A vector of ordinary length is divided by its length at once; a tiny or huge one is
+    scaled by its largest component first (no overflow or underflow of the squared
     length); a vector whose largest component is ``<= UNIT_MIN`` gives ``(0, 0, 0, False)``.
     """
+    s = x * x + y * y + z * z
+    if s > 1e-280 and s < 1e280:  # no under- or overflow: one root, one division
+        inv = 1.0 / math.sqrt(s)
+        return x * inv, y * inv, z * inv, True
     scale = max(max(abs(x), abs(y)), abs(z))
     if not scale > UNIT_MIN:
         return 0.0, 0.0, 0.0, False
