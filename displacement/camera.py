@@ -307,8 +307,31 @@ class Camera:
         return scale, inside
 
     # -------------------------------------------------------------------- rays
+    @property
+    def ray_map(self) -> np.ndarray:
+        """(2, 3, 3) the camera as two linear maps of raster coordinates ``(px, py, 1)``:
+        ``ray_map[0] @ (px, py, 1)`` is a ray's origin and ``ray_map[1] @ (px, py, 1)``
+        its direction, before it is made unit length (pinhole: the eye, and
+        ``x right + y up + forward`` with ``x = (px - w / 2) / f``, ``y = (h / 2 - py) /
+        f``; orthographic: the point ``eye + x right + y up`` on the image plane, and
+        ``forward``).  :meth:`generate_rays` applies it; the renderer's kernels take it as
+        it is."""
+        f = self._focal
+        c = -0.5 * self.width / f * self._right + 0.5 * self.height / f * self._up
+        m = np.zeros((2, 3, 3))
+        plane = np.stack([self._right / f, -self._up / f, c], axis=1)
+        if self.is_orthographic:
+            m[0] = plane
+            m[0][:, 2] += self._eye
+            m[1][:, 2] = self._forward
+        else:
+            m[0][:, 2] = self._eye
+            m[1] = plane
+            m[1][:, 2] += self._forward
+        return m
+
     def generate_rays(self, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Primary rays through raster positions.
+        """Primary rays through raster positions (:attr:`ray_map`).
 
         Parameters
         ----------
@@ -335,12 +358,8 @@ class Camera:
         if px.shape != py.shape:
             raise ValueError(f"generate_rays: px and py must have the same shape, got "
                              f"{px.shape} and {py.shape}")
-        x = (px - 0.5 * self.width) / self._focal
-        y = (0.5 * self.height - py) / self._focal
-        if self.is_orthographic:
-            origins = self._eye + x[:, None] * self._right + y[:, None] * self._up
-            dirs = np.broadcast_to(self._forward, origins.shape).copy()
-            return origins, dirs
-        d = x[:, None] * self._right + y[:, None] * self._up + self._forward
+        q = np.stack([px, py, np.ones_like(px)], axis=1)
+        m = self.ray_map
+        d = q @ m[1].T
         d /= np.linalg.norm(d, axis=1, keepdims=True)
-        return np.broadcast_to(self._eye, d.shape).copy(), d
+        return q @ m[0].T, d

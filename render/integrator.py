@@ -77,7 +77,6 @@ import numpy as np
 
 from render import embree
 from render import path as kern
-from render.camera import primary_rays
 from render.df.anisotropic_vdf import SIGNATURE as _PHASE
 from render.film import Film
 from render.frame import Frame, mirror_z
@@ -86,7 +85,7 @@ from render.lights import AreaLight, LightSet
 from render.numerics import dot
 from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
 from render.program import ProgramTable
-from render.sampler import CAMERA_PAIR, SAMPLERS, SOBOL_TABLE, pair_values
+from render.sampler import SAMPLERS, SOBOL_TABLE
 from render.volume import MAX_NESTING, is_closed, medium_of
 
 __all__ = ["render", "Integrator", "RAY_EPS", "CHUNK"]
@@ -349,6 +348,7 @@ class Integrator:
         scalars[kern.SC_PASS] = float(bool(self.passable.any()))
         scalars[kern.SC_CAM:kern.SC_CAM + 3] = self.camera.position
         scalars[kern.SC_FWD:kern.SC_FWD + 3] = self.camera.forward
+        scalars[kern.SC_WIDTH] = float(self.camera.width)
         table = ProgramTable(self.programs)
         params = np.zeros((len(self.programs), table.width))
         for s, prog in enumerate(self.programs):
@@ -360,7 +360,8 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit, lt.face_light, media, phase,
-            lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist, scalars)
+            lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist,
+            self.camera.ray_map, scalars)
         return tables, params
 
     def _scene_disk(self) -> float:
@@ -545,8 +546,6 @@ class Integrator:
         """
         n = len(pixel)
         kind = SAMPLERS[self.settings.sampler]
-        o, d = primary_rays(self.camera, pixel,
-                            pair_values(pixel, index, CAMERA_PAIR, seed, kind))
         L = np.zeros((n, 3))
         alpha = np.zeros(n)
         aov = np.zeros((n if self.aovs else 1, kern.NA))
@@ -559,8 +558,8 @@ class Integrator:
         bslot = np.zeros(1, dtype=np.int64)
         m, resume = n, False
         while True:
-            m, ns = kern.trace(self.scene_handle, tables, m, resume, o, d, pixel, index, seed,
-                               kind, SOBOL_TABLE, *lanes, lane_row, params, bf, bslot, L, alpha,
+            m, ns = kern.trace(self.scene_handle, tables, m, resume, pixel, index, seed, kind,
+                               SOBOL_TABLE, *lanes, lane_row, params, bf, bslot, L, alpha,
                                aov, *parked, *buf.shadows[0], kern.scratch(tables), buf.es,
                                buf.cso, buf.csior, buf.lw, counts)
             if ns:

@@ -36,6 +36,7 @@ import numpy as np
 from render import embree, interpreter
 from render import light_sampling as ls
 from render.bsdf import Lobe
+from render.camera import camera_ray
 from render.df._kernel_common import unitize
 from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
 from render.df.anisotropic_vdf import sample as _phase_sample
@@ -53,6 +54,7 @@ from render.light_sampling import (
 )
 from render.lights import INFINITE_DISTANCE
 from render.sampler import (
+    CAMERA_PAIR,
     FIRST_SEGMENT_PAIR,
     HERO_PAIR,
     P_BSDF,
@@ -152,6 +154,7 @@ Tables = namedtuple(
         "env_dist",
         "sky",
         "sky_dist",
+        "camera",  # (2, 3, 3) the camera's ray map (displacement.camera.Camera.ray_map)
         "scalars",  # (N_SCALARS,) see SC_* below
     ],
 )
@@ -161,7 +164,8 @@ SC_FWD = 12  # camera forward (12..14)
 SC_ENV_LIGHT = 15  # index of the environment light, -1: none
 SC_BIND = 16  # some objects are shaded with numpy (lanes may park)
 SC_PASS = 17  # some objects are cutouts or null surfaces (shadow rays may pass)
-N_SCALARS = 18
+SC_WIDTH = 18  # the image's width in pixels
+N_SCALARS = 19
 
 
 # ---------------------------------------------------------------- small kernels
@@ -312,7 +316,7 @@ def _traced(counts, t0, rays):
 
 
 @njit
-def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, sior,
+def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
           lane_row, params, bf, bslot, L, alpha, aov, plf, pli, pso, psior, sf, si, sso,
           ssior, ws, es, cso, csior, lw, counts):
     """Trace the paths of lanes ``0 .. n-1`` to their end, or until a path hits an object
@@ -320,7 +324,8 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
     state and hit written to row ``p`` of ``plf``, ``pli``, ``pso``, ``psior``.
 
     Fresh lanes (``resume`` False) start at the camera: lane ``i`` is sample
-    ``index[i]`` of pixel ``pixel[i]``, its ray ``o[i]``, ``d[i]``.  Resumed lanes are
+    ``index[i]`` of pixel ``pixel[i]``, through a point of the pixel drawn from its
+    camera pair.  Resumed lanes are
     the rows of ``lf``, ``li``, ``so``, ``sior`` (a previous call's parked lanes), each
     with its hit, bound by row ``lane_row[i]`` (-1: none) of ``bf``, ``bslot`` and
     ``params`` (:func:`bounce_binding`).  Shadow records that cannot be resolved here
@@ -340,6 +345,7 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
     may_bind = sc[SC_BIND] != 0.0
     mode, env_light = int(sc[SC_SELECT]), int(sc[SC_ENV_LIGHT])
     n_lights, rot_c, rot_s = int(sc[SC_LIGHTS]), sc[SC_ROT_C], sc[SC_ROT_S]
+    width = int(sc[SC_WIDTH])
     lights, light_tri, env_image, env_dist = tb.lights, tb.light_tri, tb.env_image, tb.env_dist
     sky, sky_dist = tb.sky, tb.sky_dist
     n_every = 0  # delta lights sampled at every vertex
@@ -377,8 +383,8 @@ def trace(scene, tb, n, resume, o, d, pixel, index, seed, kind, v1, lf, li, so, 
             v = lane_row[i]
         else:
             lane = i
-            ox, oy, oz = o[i, 0], o[i, 1], o[i, 2]
-            dx, dy, dz = d[i, 0], d[i, 1], d[i, 2]
+            jx, jy = sample_pair(v1, pixel_hash(seed, pixel[i]), index[i], CAMERA_PAIR, kind)
+            ox, oy, oz, dx, dy, dz = camera_ray(tb.camera, width, pixel[i], jx, jy)
             b0 = b1 = b2 = r0 = r1 = r2 = 1.0
             prev_pdf = seg = shift = prev_sum = 0.0
             vx = vy = vz = vnx = vny = vnz = 0.0
