@@ -91,7 +91,7 @@ def test_the_kernels_draw_is_the_pair_value():
         for g in pairs:
             pair = S.FIRST_SEGMENT_PAIR + 3 * S.PAIRS_PER_SEGMENT + g
             want = S.pair_values(pixel, index, pair, 4, kind)
-            got = [S.sample_pair(S.SOBOL_TABLE, S.pixel_hash(4, p), i, pair, kind)
+            got = [S.sample_pair(S.SOBOL_TABLE, np.uint64(S.pixel_hash(4, p)), i, pair, kind)
                    for p, i in zip(pixel, index, strict=True)]
             assert np.array_equal(np.array(got), want)
 
