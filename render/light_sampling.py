@@ -201,7 +201,7 @@ def environment_radiance(lights, env_light, env_image, env_dist, sky, sky_dist, 
 
 
 # ---------------------------------------------------------------- choosing a light
-@njit
+@njit(inline="always")
 def _importance(lights, mode, j, px, py, pz, nx, ny, nz):
     """How much light ``j`` may contribute at p with normal n (n = 0: a point in a
     medium), up to a common factor: the weight by which :func:`select_light` picks it.
