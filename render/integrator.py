@@ -1,22 +1,19 @@
-"""The path tracer: one wavefront of path lanes per chunk of samples, through the
-compiled stages of :mod:`render.path`.
+"""The path tracer: every path of a chunk of samples carried to its end by one compiled
+kernel, :func:`render.path.trace`.
 
 Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` integrators):
 
 * primary rays through random points of each pixel (box filter); every sample value
   of a path is an Owen-scrambled Sobol point of its pixel (:mod:`render.sampler`);
-* per segment, every live lane through Embree (:func:`render.path.intersect`), then one
-  compiled pass over the lanes (:func:`render.path.bounce`): emission found by a ray is
+* per segment, the ray through Embree, then at its end: emission found by a ray is
   weighted by multiple importance sampling (power heuristic) against next-event
   estimation; next-event estimation picks one light (area, point, spot, directional,
   environment map or sun and sky) by what it can contribute at the vertex
-  (:func:`render.path.select_light`, ``[render] light_selection``), samples each delta
-  light at every vertex too (``every_delta_light``), and writes a shadow record per
-  light sampled;
+  (:func:`render.light_sampling.select_light`, ``[render] light_selection``), samples
+  each delta light at every vertex too (``every_delta_light``), and traces a shadow
+  ray to each light sampled;
   the bsdf's own sample continues the path (specular lobes too); Russian roulette from
   ``rr_depth``; ``max_depth`` counts path vertices after the camera, as Mitsuba does;
-* shadow records are traced and resolved (:func:`render.path.shadow_trace`,
-  :func:`render.path.shadow_resolve`) until each reaches its light or is blocked;
 * cutout opacity is stochastic: a lane passes through a surface with probability
   ``1 - cutout_opacity`` without a bounce (shadow rays too); alpha is 1 where a path's
   first opaque hit exists;
@@ -24,12 +21,12 @@ Algorithm (unidirectional path tracing, as Mitsuba 3's ``path``/``volpath`` inte
   size (plus float32 rounding of the coordinates), because Embree's tnear is 0.
 
 Materials are programs (:mod:`render.program`) run by :mod:`render.interpreter` inside
-the kernels.  An object whose material's arguments vary over the surface (textures,
+the kernel.  An object whose material's arguments vary over the surface (textures,
 noise, a bumped normal, a varying cutout, IOR or emission, an explicit ``tangent_u``
-or layer ``normal``) is shaded by ``material.shade`` (numpy) for the lanes that hit it,
-between the stages; the kernels take that lane's parameter row and frame
-(:meth:`Integrator._bind`).  So is an object whose IOR context changes because the
-path is inside another object.
+or layer ``normal``) is shaded by ``material.shade`` (numpy) for the lanes that hit it:
+the kernel parks them, :meth:`Integrator._bind` shades them in a batch, and the kernel
+resumes them with that lane's parameter row and frame.  So is an object whose IOR
+context changes because the path is inside another object.
 
 Interfaces, thin walls and volumes (``reference/mdl-distribution-functions.md`` §1.2,
 §1.3, §6; :mod:`render.volume`):
@@ -373,7 +370,7 @@ class Integrator:
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):
         """World position, unit shading normal, unit tangents and uv at hit points (the
-        bounce kernel's own interpolation, :func:`render.path.hit_attributes`)."""
+        path kernel's own interpolation, :func:`render.path.hit_attributes`)."""
         a = np.empty((len(face), 14))
         kern.hit_attributes(self.geo.packed, self.geo.faces, self.geo.face_normal, face, b1, b2, a)
         return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12], a[:, 12:14]
@@ -461,8 +458,8 @@ class Integrator:
         return emission
 
     def _bind(self, face, b1, b2, d, so, sior, nstk, only=None):
-        """The per-lane bindings of :func:`render.path.bounce` for lanes that hit
-        objects shaded with numpy (and objects whose IOR context is not air).
+        """The per-lane bindings of :func:`render.path.trace` for lanes parked at objects
+        shaded with numpy (and objects whose IOR context is not air).
 
         ``only`` (k,) bool restricts binding to those objects (shadow rays need only
         cutout and null surfaces).  Returns ``(tables, params, lane_row, bf, bslot)``:

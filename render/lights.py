@@ -1,8 +1,8 @@
 """Light sources: point, spot, directional, area (emissive geometry) and environments.
 
 These classes hold a light's parameters, checked, and the tables it is sampled by; the
-sampling itself is one compiled kernel for every kind (:func:`render.path.sample_light`,
-batch form :func:`render.path.sample_lights`): for a receiving point ``p`` it picks a
+sampling itself is one compiled kernel for every kind (:func:`render.light_sampling.sample_light`,
+batch form :func:`render.light_sampling.sample_lights`): for a receiving point ``p`` it picks a
 direction ``wi`` toward the light and returns the radiance arriving along it with the
 solid-angle density of that choice.  Delta lights (point, spot, directional) have
 ``pdf = 1`` (times the selection probability) and ``delta = True``: the integrator gives
@@ -296,7 +296,7 @@ class AreaLight(Light):
 
 class LightSet:
     """All the lights of a scene (next-event estimation picks among them with
-    :func:`render.path.select_light`).
+    :func:`render.light_sampling.select_light`).
 
     Parameters
     ----------

@@ -289,7 +289,7 @@ def hit_attributes(packed, faces, face_normal, f, b1, b2, out):
 
 
 def scratch(tb) -> np.ndarray:
-    """The interpreter's scratch for the programs of ``tb`` (one per thread and stage
+    """The interpreter's scratch for the programs of ``tb`` (one per thread and kernel
     call: the kernels own no memory, so they count no references)."""
     return np.empty(interpreter.work_size(len(tb.code), len(tb.kids), len(tb.frames)))
 
@@ -328,9 +328,10 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     camera pair.  Resumed lanes are
     the rows of ``lf``, ``li``, ``so``, ``sior`` (a previous call's parked lanes), each
     with its hit, bound by row ``lane_row[i]`` (-1: none) of ``bf``, ``bslot`` and
-    ``params`` (:func:`bounce_binding`).  Shadow records that cannot be resolved here
-    (an area light whose emission varies, or a cutout or null surface that numpy must
-    shade) are parked in ``sf``, ``si``, ``sso``, ``ssior`` for :func:`resolve_shadows`.
+    ``params`` (:meth:`render.integrator.Integrator._bind`).  Shadow records that cannot
+    be resolved here (an area light whose emission varies, or a cutout or null surface
+    that numpy must shade) are parked in ``sf``, ``si``, ``sso``, ``ssior`` for
+    :func:`resolve_shadows`.
 
     What each path sees is added to ``L[lane]``, its alpha and AOVs (first hits) to
     ``alpha`` and ``aov``.  Scratch: ``ws`` (the interpreter's), ``es`` (Embree's ray

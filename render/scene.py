@@ -171,7 +171,7 @@ class RenderSettings:
         cannot see is not diced (:meth:`Scene.build`).
     light_selection : {"contribution", "power", "uniform"}
         How next-event estimation picks a light at a vertex
-        (:func:`render.path.select_light`): by a bound on what each light can contribute
+        (:func:`render.light_sampling.select_light`): by a bound on what each light can contribute
         there (distance, orientation, power), by power alone, or uniformly.
     every_delta_light : bool
         Sample each point, spot and directional light at every vertex (when a scene

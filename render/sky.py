@@ -45,7 +45,7 @@ and :meth:`SunAndSky.eval` the analytic radiance, so estimates are unbiased what
 the table's resolution.
 
 Kernels: the per-direction math is written once, as numba scalar kernels that the
-path tracer's bounce kernel calls: :func:`sun_and_sky_eval` (radiance),
+path kernel calls: :func:`sun_and_sky_eval` (radiance),
 :func:`sun_and_sky_pdf` and :func:`sun_and_sky_sample`, on the constants of
 :meth:`SunAndSky.kernel_params` (everything fixed per sky, the Perez coefficients and
 zenith values included) and the table ``SunAndSky._p``, ``._cdf``.  The numpy methods

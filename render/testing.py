@@ -585,7 +585,7 @@ def light_tables(lights, objects=(), selection: str = "uniform", every_delta: bo
 
 def light_samples(lights, p: ArrayLike, u: ArrayLike, objects=()):
     """Samples of the first light of a scene from points ``p`` (n, 3) with uniforms
-    ``u`` (n, 2), by :func:`render.path.sample_light`: ``(wi, distance, radiance, pdf,
+    ``u`` (n, 2), by :func:`render.light_sampling.sample_light`: ``(wi, distance, radiance, pdf,
     delta)``, the pdf divided by the light's selection probability."""
     from render.path import sample_lights, selection
 
