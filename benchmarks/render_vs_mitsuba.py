@@ -13,9 +13,9 @@ For each it measures
   our BVH build are excluded).  Mitsuba renders the very triangles we trace (our
   tessellation, vertex normals included), and, for scale, its analytic sphere and
   rectangles;
-* the share of our threads' time spent in the Embree stages of the compiled core
-  (:func:`render.path.intersect` and :func:`render.path.shadow_trace`, which do nothing
-  but call ``rtcIntersect1``/``rtcOccluded1``), and rays per sample;
+* the share of our threads' time spent inside Embree (``rtcIntersect1``/``rtcOccluded1``
+  called from the path kernel; every 16th call timed by the CPU's time-stamp counter,
+  :data:`render.path.TIMED_EVERY`), and rays per sample;
 * equal-time error: both render for the same wall time, and their RMSE against a
   converged reference (``--ref-spp``) is compared (Mitsuba with its ``independent``
   sampler and with its ``ldsampler``, whose padded (0, 2)-sequences are the peer of

@@ -300,22 +300,24 @@ def test_shadow_transmittance_inside_a_medium():
         scene = Scene(cam, [box], [], RenderSettings(4, 4, spp=1))
         integ = Integrator(scene, scene.build())
         assert integ.null_candidate[0] == (mode == "scatter_transmit")
-        buffers = integ._shadow_buffers(2)
-        sf, si, sso, ssior = buffers[0]
-        sf[:] = 0.0
+        nest = integ.nesting
+        records = (np.zeros((2, path.NSF)), np.zeros((2, path.NSI), dtype=np.int64),
+                   np.zeros((2, nest), dtype=np.int64), np.ones((2, nest)))
+        buf = integ._buffers(2)
+        buf.shadows = (records, tuple(np.zeros_like(a) for a in records))
+        sf, si, sso, ssior = records
         sf[:, path.S_D:path.S_D + 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
         sf[:, path.S_FAR] = [0.5, 1.5]
         sf[:, path.S_TAIL] = [0.25, 0.0]
         sf[:, path.S_C:path.S_C + 3] = 1.0
-        si[:] = 0
         si[:, path.S_ID] = [0, 1]
-        si[:, path.S_FACE] = -1
+        si[:, path.S_FACE] = -1  # constant emission
+        si[:, path.S_HIT] = -1  # not traced yet
         si[:, path.S_NSTK] = 1
         sso[:] = 0  # inside object 0
-        ssior[:] = 1.0
         L = np.zeros((2, 3))
-        sample = (np.zeros(2, dtype=np.int64), np.arange(2), 0, 0, 0)  # pixel, index, seed, ...
-        integ._shadows(2, buffers, sample, L)
+        sample = (np.zeros(2, dtype=np.int64), np.arange(2), 0, 0)  # pixel, index, seed, kind
+        integ._shadows(2, buf, sample, L, np.zeros(3, dtype=np.uint64))
         assert np.allclose(L, np.exp(-np.outer([0.75, 1.5], sigma)), rtol=1e-9)
 
 
