@@ -137,7 +137,7 @@ Tables = namedtuple(
         "roots",  # (2k,) root node of each slot's program, -1: black
         "frame_lo",
         "frame_hi",
-        "obj_flags",  # (k,) int64 CUTOUT | NULL | ENCLOSES | TWO_FACED | EMIT_CONST
+        "obj_flags",  # (k,) int64 the object flags above
         "obj_opacity",  # (k,) constant cutout opacity
         "obj_ior",  # (k,) constant IOR (mean over channels)
         "obj_medium",  # (k,) int64 medium of the inside, -1: none
