@@ -394,7 +394,7 @@ def new_scratch():
     return np.zeros(SCRATCH_SIZE, np.float32)
 
 
-@njit(inline="always")
+@njit
 def _check_scratch(scratch):
     if scratch.shape[0] < SCRATCH_SIZE or scratch.ctypes.data & 15:
         raise ValueError("scratch must be a float32 array made by render.embree.new_scratch()")
