@@ -55,6 +55,15 @@ from render.df.fresnel_layer import curve_nk as _fr_curve_nk
 from render.df.fresnel_layer import layer_estimates as _fr_estimates
 from render.df.fresnel_layer import layer_factors as _fr_factors
 from render.df.fresnel_layer import layer_possible as _fr_possible
+from render.df._microfacet import mf_albedo as _mf_albedo
+from render.df.microfacet_beckmann_smith_bsdf import eval_pdf as _mbs_eval_pdf
+from render.df.microfacet_beckmann_smith_bsdf import sample as _mbs_sample
+from render.df.microfacet_beckmann_vcavities_bsdf import eval_pdf as _mbv_eval_pdf
+from render.df.microfacet_beckmann_vcavities_bsdf import sample as _mbv_sample
+from render.df.microfacet_ggx_smith_bsdf import eval_pdf as _mgs_eval_pdf
+from render.df.microfacet_ggx_smith_bsdf import sample as _mgs_sample
+from render.df.microfacet_ggx_vcavities_bsdf import eval_pdf as _mgv_eval_pdf
+from render.df.microfacet_ggx_vcavities_bsdf import sample as _mgv_sample
 from render.df.normalized_mix import mix_weights as _normalized_weights
 from render.df.simple_glossy_bsdf import albedo as _sg_albedo
 from render.df.simple_glossy_bsdf import eval_pdf as _sg_eval_pdf
@@ -85,6 +94,12 @@ from render.program import (
     NKIDS,
     O_ANISOTROPIC_VDF,
     O_BACKSCATTERING_GLOSSY,
+    O_LEAF_HI,
+    O_LEAF_LO,
+    O_MICROFACET_BECKMANN_SMITH,
+    O_MICROFACET_BECKMANN_VCAVITIES,
+    O_MICROFACET_GGX_SMITH,
+    O_MICROFACET_GGX_VCAVITIES,
     O_CLAMPED_MIX,
     O_CLAMPED_MIX_EDF,
     O_CUSTOM_CURVE_LAYER,
@@ -143,36 +158,53 @@ def work_size(n_nodes, n_kids, n_frames):
 
 # ------------------------------------------------------------------ leaf dispatch
 @njit
-def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz):
-    """``(f0, f1, f2, pdf)`` of the leaf df ``op`` (local frame)."""
+def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
+    """``(f0, f1, f2, pdf)`` of the leaf df ``op`` (local frame; the node's table at
+    ``tables[t:]``)."""
     if op == O_DIFFUSE_REFLECTION:
         return _dr_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_SIMPLE_GLOSSY:
-        return _sg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+        return _sg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_MICROFACET_GGX_SMITH:
+        return _mgs_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_MICROFACET_BECKMANN_SMITH:
+        return _mbs_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_MICROFACET_GGX_VCAVITIES:
+        return _mgv_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_MICROFACET_BECKMANN_VCAVITIES:
+        return _mbv_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_SPECULAR:
         return _sp_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_DIFFUSE_TRANSMISSION:
         return _dt_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_BACKSCATTERING_GLOSSY:
-        return _bg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+        return _bg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     return 0.0, 0.0, 0.0, 0.0
 
 
 @njit
-def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y):
+def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
     """``(wi xyz, pdf, weight rgb, lobe)`` of the leaf df ``op`` (lobe 0: failed)."""
     if op == O_DIFFUSE_REFLECTION:
         return _dr_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_SIMPLE_GLOSSY:
-        return _sg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+        return _sg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_MICROFACET_GGX_SMITH:
+        return _mgs_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_MICROFACET_BECKMANN_SMITH:
+        return _mbs_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_MICROFACET_GGX_VCAVITIES:
+        return _mgv_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_MICROFACET_BECKMANN_VCAVITIES:
+        return _mbv_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_SPECULAR:
         return _sp_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_DIFFUSE_TRANSMISSION:
         return _dt_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_BACKSCATTERING_GLOSSY:
-        return _bg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+        return _bg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
@@ -186,6 +218,8 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _dr_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_SIMPLE_GLOSSY:
         return _sg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
+    if op >= O_MICROFACET_GGX_SMITH and op <= O_MICROFACET_BECKMANN_VCAVITIES:
+        return _mf_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_SPECULAR:
         return _sp_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_DIFFUSE_TRANSMISSION:
@@ -199,7 +233,8 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
 
 @njit
 def _is_leaf(op):
-    return op <= O_ANISOTROPIC_VDF or op == O_DIFFUSE_EDF or op == O_SPOT_EDF
+    return (op <= O_ANISOTROPIC_VDF or op == O_DIFFUSE_EDF or op == O_SPOT_EDF
+            or (op >= O_LEAF_LO and op <= O_LEAF_HI))
 
 
 @njit
@@ -536,7 +571,7 @@ def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
         v0 = v1 = v2 = pdf = 0.0
         if _is_leaf(op):
             v0, v1, v2, pdf = leaf_eval_pdf(op, P, row, b, fl, wo[0], wo[1], wo[2],
-                                            wi[0], wi[1], wi[2])
+                                            wi[0], wi[1], wi[2], tables, code[k, TABLE])
         else:
             k0 = code[k, KID0]
             nk = code[k, NKIDS]
@@ -617,7 +652,7 @@ def eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, i
     ``f0 .. f1 - 1``) at ``(wo, wi)`` in its shading frame."""
     if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df in the shading frame
         return leaf_eval_pdf(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
-                             ox, oy, oz, ix, iy, iz)
+                             ox, oy, oz, ix, iy, iz, tables, code[root, TABLE])
     lo = root - code[root, SIZE] + 1
     prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
     evaluate(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ix, iy, iz)
@@ -634,7 +669,7 @@ def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1,
     of the registers prepare sets)."""
     if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df: its kernel alone
         return leaf_sample(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
-                           ox, oy, oz, u1, u2x, u2y)
+                           ox, oy, oz, u1, u2x, u2y, tables, code[root, TABLE])
     n = code.shape[0]
     ko = n * _R
     fo = ko + kids.shape[0] * _KR
@@ -690,7 +725,7 @@ def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1,
     fr = fo + f * _FR
     wx, wy, wz, pdf, w0, w1, w2, lobe = leaf_sample(
         code[k, OP], P, row, code[k, BASE], code[k, FLAGS], ws[fr + _FWO], ws[fr + _FWO + 1],
-        ws[fr + _FWO + 2], u1, u2x, u2y)
+        ws[fr + _FWO + 2], u1, u2x, u2y, tables, code[k, TABLE])
     if lobe == 0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     wx, wy, wz = _to_frame0(frames, ws, fo, f, wx, wy, wz)

@@ -462,7 +462,9 @@ _SIGNATURE_SOURCES = {
         "diffuse_reflection_bsdf", "diffuse_transmission_bsdf", "specular_bsdf",
         "simple_glossy_bsdf", "backscattering_glossy_reflection_bsdf", "diffuse_edf",
         "spot_edf", "anisotropic_vdf", "weighted_layer", "fresnel_layer",
-        "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor")},
+        "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor",
+        "microfacet_ggx_smith_bsdf", "microfacet_beckmann_smith_bsdf",
+        "microfacet_ggx_vcavities_bsdf", "microfacet_beckmann_vcavities_bsdf")},
     **{f"color_{n}": (n, "COLOR_SIGNATURE") for n in (
         "weighted_layer", "fresnel_layer", "custom_curve_layer", "normalized_mix",
         "clamped_mix")},

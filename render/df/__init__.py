@@ -58,6 +58,19 @@ from render.df.normalized_mix import (
     color_normalized_mix,
     normalized_mix,
 )
+from render.df.microfacet_beckmann_smith_bsdf import (
+    MicrofacetBeckmannSmithBsdf,
+    microfacet_beckmann_smith_bsdf,
+)
+from render.df.microfacet_beckmann_vcavities_bsdf import (
+    MicrofacetBeckmannVcavitiesBsdf,
+    microfacet_beckmann_vcavities_bsdf,
+)
+from render.df.microfacet_ggx_smith_bsdf import MicrofacetGgxSmithBsdf, microfacet_ggx_smith_bsdf
+from render.df.microfacet_ggx_vcavities_bsdf import (
+    MicrofacetGgxVcavitiesBsdf,
+    microfacet_ggx_vcavities_bsdf,
+)
 from render.df.simple_glossy_bsdf import SimpleGlossyBsdf, simple_glossy_bsdf
 from render.df.specular_bsdf import SpecularBsdf, specular_bsdf
 from render.df.spot_edf import SpotEdf, spot_edf
@@ -89,6 +102,14 @@ __all__ = [
     "simple_glossy_bsdf",
     "BackscatteringGlossyReflectionBsdf",
     "backscattering_glossy_reflection_bsdf",
+    "MicrofacetGgxSmithBsdf",
+    "microfacet_ggx_smith_bsdf",
+    "MicrofacetBeckmannSmithBsdf",
+    "microfacet_beckmann_smith_bsdf",
+    "MicrofacetGgxVcavitiesBsdf",
+    "microfacet_ggx_vcavities_bsdf",
+    "MicrofacetBeckmannVcavitiesBsdf",
+    "microfacet_beckmann_vcavities_bsdf",
     "DiffuseEdf",
     "diffuse_edf",
     "SpotEdf",

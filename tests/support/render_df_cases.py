@@ -68,6 +68,10 @@ class DfCase:
     thin : bool
     albedo_tol : float
         Accuracy of ``albedo()`` (0 for closed forms; the table accuracy otherwise).
+    lossless_tol : float
+        For ``lossless`` cases whose losslessness rests on a table (the energy
+        compensation of ``multiscatter_tint``): the table's accuracy, added to the
+        furnace's 3 sigma.
     """
 
     id: str
@@ -82,6 +86,7 @@ class DfCase:
     ior: tuple[float, float] = (1.0, 1.0)
     thin: bool = False
     albedo_tol: float = 1e-9
+    lossless_tol: float = 0.0
     skip_albedo_wos: tuple = field(default_factory=tuple)
     #: viewing directions of the chi-square tests, if not CHI2_WOS
     chi2_wos: tuple | None = None
@@ -277,9 +282,12 @@ def check_integrals(case: DfCase, theta_phi) -> dict:
     success = s.valid.mean()
     out = {"mc": mean, "se": se, "success": success}
     # furnace
-    assert np.all(mean <= 1.0 + 3 * se + 1e-12), f"white furnace gains energy: {mean} ± {se}"
+    # (a lobe made lossless by a table, multiscatter_tint's compensation, is exact only to
+    # the table's accuracy: lossless_tol, 0 for every other case)
+    assert np.all(mean <= 1.0 + 3 * se + case.lossless_tol + 1e-12), (
+        f"white furnace gains energy: {mean} ± {se}")
     if case.lossless:
-        assert np.all(np.abs(mean - 1.0) <= 3 * se + 1e-12), (
+        assert np.all(np.abs(mean - 1.0) <= 3 * se + case.lossless_tol + 1e-12), (
             f"lossless lobe loses energy: {mean} ± {se}"
         )
     alb = bsdf.albedo(wo[None])[0]
