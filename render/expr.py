@@ -765,8 +765,23 @@ class _Evaluator:
             function = getattr(df, last)
         else:
             function = FUNCTIONS.get(node.callee.text) or FUNCTIONS[last]
-        params, returns = mdl_signature(function)
-        kwargs = self.bind(node, params)
+        overloads = getattr(function, "overloads", None) if kind == "df" else None
+        if overloads:  # MDL's overloads of one name: the first that takes the arguments
+            first = None
+            for candidate in overloads:
+                params, returns = mdl_signature(candidate)
+                try:
+                    kwargs = self.bind(node, params)
+                except MaterialExprError as e:
+                    first = first or e
+                    continue
+                function = candidate
+                break
+            else:
+                raise first
+        else:
+            params, returns = mdl_signature(function)
+            kwargs = self.bind(node, params)
         try:
             result = function(**kwargs)
         except MaterialExprError:

@@ -33,6 +33,7 @@ from render.df.backscattering_glossy_reflection_bsdf import albedo as _bg_albedo
 from render.df.backscattering_glossy_reflection_bsdf import eval_pdf as _bg_eval_pdf
 from render.df.backscattering_glossy_reflection_bsdf import sample as _bg_sample
 from render.df.clamped_mix import mix_weights as _clamped_weights
+from render.df.coat_absorption_factor import scale as _ca_scale
 from render.df.custom_curve_layer import curve_constant as _cc_curve_constant
 from render.df.custom_curve_layer import curve_h as _cc_curve_h
 from render.df.custom_curve_layer import curve_nk as _cc_curve_nk
@@ -48,7 +49,9 @@ from render.df.diffuse_transmission_bsdf import albedo as _dt_albedo
 from render.df.diffuse_transmission_bsdf import eval_pdf as _dt_eval_pdf
 from render.df.diffuse_transmission_bsdf import sample as _dt_sample
 from render.df.directional_factor import curve_constant as _df_constant
+from render.df.directional_factor import edf_scale as _dfe_scale
 from render.df.directional_factor import scale as _df_scale
+from render.df.fresnel_factor import scale as _ff_scale
 from render.df.fresnel_layer import curve_constant as _fr_curve_constant
 from render.df.fresnel_layer import curve_h as _fr_curve_h
 from render.df.fresnel_layer import curve_nk as _fr_curve_nk
@@ -64,6 +67,14 @@ from render.df.microfacet_ggx_smith_bsdf import eval_pdf as _mgs_eval_pdf
 from render.df.microfacet_ggx_smith_bsdf import sample as _mgs_sample
 from render.df.microfacet_ggx_vcavities_bsdf import eval_pdf as _mgv_eval_pdf
 from render.df.microfacet_ggx_vcavities_bsdf import sample as _mgv_sample
+from render.df.measured_curve_factor import curve_constant as _mcf_constant
+from render.df.measured_curve_factor import scale as _mcf_scale
+from render.df.measured_curve_layer import curve_constant as _mc_curve_constant
+from render.df.measured_curve_layer import curve_h as _mc_curve_h
+from render.df.measured_curve_layer import curve_nk as _mc_curve_nk
+from render.df.measured_curve_layer import layer_estimates as _mc_estimates
+from render.df.measured_curve_layer import layer_factors as _mc_factors
+from render.df.measured_curve_layer import layer_possible as _mc_possible
 from render.df.normalized_mix import mix_weights as _normalized_weights
 from render.df.simple_glossy_bsdf import albedo as _sg_albedo
 from render.df.simple_glossy_bsdf import eval_pdf as _sg_eval_pdf
@@ -74,6 +85,8 @@ from render.df.specular_bsdf import sample as _sp_sample
 from render.df.spot_edf import edf_eval_pdf as _se_eval_pdf
 from render.df.spot_edf import edf_sample as _se_sample
 from render.df.tint import scale as _tint_scale
+from render.df.tint import scale_rt as _tint_rt_scale
+from render.df.unbounded_mix import mix_weights as _unbounded_weights
 from render.df.weighted_layer import layer_estimates as _wl_estimates
 from render.df.weighted_layer import layer_factors as _wl_factors
 from render.df.weighted_layer import layer_possible as _wl_possible
@@ -94,6 +107,15 @@ from render.program import (
     NKIDS,
     O_ANISOTROPIC_VDF,
     O_BACKSCATTERING_GLOSSY,
+    O_COAT_ABSORPTION_FACTOR,
+    O_DIRECTIONAL_FACTOR_EDF,
+    O_FRESNEL_FACTOR,
+    O_MEASURED_CURVE_FACTOR,
+    O_MEASURED_CURVE_LAYER,
+    O_TINT_EDF,
+    O_TINT_RT,
+    O_UNBOUNDED_MIX,
+    O_UNBOUNDED_MIX_EDF,
     O_LEAF_HI,
     O_LEAF_LO,
     O_MICROFACET_BECKMANN_SMITH,
@@ -239,17 +261,45 @@ def _is_leaf(op):
 
 @njit
 def _is_layer(op):
-    return op == O_WEIGHTED_LAYER or op == O_FRESNEL_LAYER or op == O_CUSTOM_CURVE_LAYER
+    return (op == O_WEIGHTED_LAYER or op == O_FRESNEL_LAYER or op == O_CUSTOM_CURVE_LAYER
+            or op == O_MEASURED_CURVE_LAYER)
 
 
 @njit
 def _is_mix(op):
     return (op == O_NORMALIZED_MIX or op == O_CLAMPED_MIX or op == O_NORMALIZED_MIX_EDF
-            or op == O_CLAMPED_MIX_EDF)
+            or op == O_CLAMPED_MIX_EDF or op == O_UNBOUNDED_MIX or op == O_UNBOUNDED_MIX_EDF)
+
+
+@njit
+def _is_edf_mix(op):
+    return op == O_NORMALIZED_MIX_EDF or op == O_CLAMPED_MIX_EDF or op == O_UNBOUNDED_MIX_EDF
+
+
+@njit
+def _is_edf_scale(op):
+    """An edf modifier: a factor of ``wo`` alone times its child's emission."""
+    return op == O_TINT_EDF or op == O_DIRECTIONAL_FACTOR_EDF
+
+
+@njit
+def _scale_varies(op, P, row, b, fl):
+    """Whether a modifier's factor depends on ``wi`` (then its albedo needs the
+    quadrature correction): every one but ``tint`` and a constant curve."""
+    if op == O_TINT or _is_edf_scale(op):
+        return False
+    if op == O_DIRECTIONAL_FACTOR:
+        return not _df_constant(P, row, b, fl)
+    if op == O_MEASURED_CURVE_FACTOR:
+        return not _mcf_constant(P, row, b, fl)
+    return True
 
 
 @njit
 def _layer_factors(op, P, row, b, fl, o, i, ol, il, co, ci):
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_factors(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], ol[0], ol[1],
+                           ol[2], il[0], il[1], il[2], co[0], co[1], co[2], ci[0], ci[1], ci[2])
     if op == O_FRESNEL_LAYER:
         return _fr_factors(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], ol[0], ol[1],
                            ol[2], il[0], il[1], il[2], co[0], co[1], co[2], ci[0], ci[1], ci[2])
@@ -262,6 +312,9 @@ def _layer_factors(op, P, row, b, fl, o, i, ol, il, co, ci):
 
 @njit
 def _layer_estimates(op, P, row, b, fl, o, ol, co):
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_estimates(P, row, b, fl, o[0], o[1], o[2], ol[0], ol[1], ol[2],
+                             co[0], co[1], co[2])
     if op == O_FRESNEL_LAYER:
         return _fr_estimates(P, row, b, fl, o[0], o[1], o[2], ol[0], ol[1], ol[2],
                              co[0], co[1], co[2])
@@ -274,6 +327,8 @@ def _layer_estimates(op, P, row, b, fl, o, ol, co):
 
 @njit
 def _layer_possible(op, P, row, b, fl):
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_possible(P, row, b, fl)
     if op == O_FRESNEL_LAYER:
         return _fr_possible(P, row, b, fl)
     if op == O_CUSTOM_CURVE_LAYER:
@@ -286,6 +341,8 @@ def curve_h(op, P, row, b, fl, vx, vy, vz, xx, xy, xz):
     """A curve layer's ``C(|v.h|)`` at layer-frame directions ``v``, ``x``."""
     if op == O_FRESNEL_LAYER:
         return _fr_curve_h(P, row, b, fl, vx, vy, vz, xx, xy, xz)
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_curve_h(P, row, b, fl, vx, vy, vz, xx, xy, xz)
     return _cc_curve_h(P, row, b, fl, vx, vy, vz, xx, xy, xz)
 
 
@@ -294,6 +351,8 @@ def curve_nk(op, P, row, b, fl, vx, vy, vz):
     """A curve layer's ``C(|v.z|)`` (the control variate's curve)."""
     if op == O_FRESNEL_LAYER:
         return _fr_curve_nk(P, row, b, fl, vx, vy, vz)
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_curve_nk(P, row, b, fl, vx, vy, vz)
     return _cc_curve_nk(P, row, b, fl, vx, vy, vz)
 
 
@@ -304,13 +363,26 @@ def curve_constant(op, P, row, b, fl):
         return _fr_curve_constant(P, row, b, fl)
     if op == O_CUSTOM_CURVE_LAYER:
         return _cc_curve_constant(P, row, b, fl)
+    if op == O_MEASURED_CURVE_LAYER:
+        return _mc_curve_constant(P, row, b, fl)
     return True
 
 
 @njit
 def _scale(op, P, row, b, fl, o, i):
-    if op == O_TINT:
+    """A modifier's factor at ``(wo, wi)`` (an edf modifier's at ``wo``)."""
+    if op == O_TINT or op == O_TINT_EDF:
         return _tint_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    if op == O_TINT_RT:
+        return _tint_rt_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    if op == O_FRESNEL_FACTOR:
+        return _ff_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    if op == O_COAT_ABSORPTION_FACTOR:
+        return _ca_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    if op == O_MEASURED_CURVE_FACTOR:
+        return _mcf_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
+    if op == O_DIRECTIONAL_FACTOR_EDF:
+        return _dfe_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
     return _df_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
 
 
@@ -318,6 +390,8 @@ def _scale(op, P, row, b, fl, o, i):
 def _mix_weight(op, P, row, b, fl, k, i):
     if op == O_CLAMPED_MIX or op == O_CLAMPED_MIX_EDF:
         return _clamped_weights(P, row, b, fl, k, i)
+    if op == O_UNBOUNDED_MIX or op == O_UNBOUNDED_MIX_EDF:
+        return _unbounded_weights(P, row, b, fl, k, i)
     return _normalized_weights(P, row, b, fl, k, i)
 
 
@@ -523,7 +597,7 @@ def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
             ws[r + _CH + 1] = el1 * al1 * g + eb1 * ab1
             ws[r + _CH + 2] = el2 * al2 * g + eb2 * ab2
         elif _is_mix(op):
-            edf = op == O_NORMALIZED_MIX_EDF or op == O_CLAMPED_MIX_EDF
+            edf = _is_edf_mix(op)
             s0 = s1 = s2 = 0.0
             for j in range(nk):
                 o = ko + (k0 + j) * _KR
@@ -915,8 +989,7 @@ def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy,
                 e0, e1, e2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3])
                 q = c * _R + _AL
                 a0, a1, a2 = e0 * ws[q], e1 * ws[q + 1], e2 * ws[q + 2]
-                if op == O_DIRECTIONAL_FACTOR and not (_is_mirror(code, c) or
-                                                       _df_constant(P, row, b, fl)):
+                if _scale_varies(op, P, row, b, fl) and not _is_mirror(code, c):
                     d0, d1, d2 = _correction(code, kids, frames, P, tables, row, ws, k, c, 2,
                                              e0, e1, e2, f0, f1, ox, oy, oz, points)
                     a0, a1, a2 = max(a0 + d0, 0.0), max(a1 + d1, 0.0), max(a2 + d2, 0.0)
@@ -946,6 +1019,7 @@ def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, o
     (``Edf.eval``, ``Edf.pdf``)."""
     n = code.shape[0]
     ko = n * _R
+    fo = ko + kids.shape[0] * _KR
     lo = root - code[root, SIZE] + 1
     prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
     for k in range(lo, root + 1):
@@ -955,6 +1029,18 @@ def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, o
         if _is_leaf(op):
             v0, v1, v2, pdf = _edf_leaf_eval_pdf(op, P, row, code[k, BASE], code[k, FLAGS],
                                                  ox, oy, oz)
+        elif _is_edf_scale(op):
+            c = kids[code[k, KID0]]
+            if c != _NO_KID:
+                fr = fo + code[k, FRAME] * _FR
+                wo = ws[fr + _FWO:fr + _FWO + 3]
+                f0, f1, f2 = _scale(op, P, row, code[k, BASE], code[k, FLAGS], wo, wo)
+                q = c * _R
+                v0, v1, v2 = f0 * ws[q], f1 * ws[q + 1], f2 * ws[q + 2]
+                if _any_pos(v0, v1, v2):
+                    pdf = ws[q + _PDF]
+            if not pdf > 0.0:
+                v0 = v1 = v2 = pdf = 0.0
         else:
             k0 = code[k, KID0]
             for j in range(code[k, NKIDS]):
@@ -992,6 +1078,11 @@ def edf_sample(code, kids, frames, P, tables, row, ws, root, f0, f1, u1, u2x, u2
     while not _is_leaf(code[k, OP]):
         k0 = code[k, KID0]
         nk = code[k, NKIDS]
+        if _is_edf_scale(code[k, OP]):  # a modifier: its one child
+            k = kids[k0]
+            if k == _NO_KID:
+                return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            continue
         last = -1
         for jj in range(k0, k0 + nk):
             if ws[ko + jj * _KR + _KSEL] > 0.0:

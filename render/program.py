@@ -46,7 +46,7 @@ from functools import lru_cache
 import numpy as np
 
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe, check_dirs, check_samples
-from render.df._signature import MODE_FLAGS, REQUIRED, THIN_WALLED, Signature
+from render.df._signature import ARRAYS, MODE_FLAGS, REQUIRED, THIN_WALLED, Signature
 from render.df._signature import WIDTH as TYPE_WIDTH
 
 __all__ = [
@@ -215,8 +215,27 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
     missing parameters take MDL's defaults (a missing required one is an error), missing
     context values 1 (``ior_*``).  ``mode`` and ``thin_walled`` become flags.
     """
-    cols, flags = [], 0
+    cols, flags, tail = [], 0, []
     for p in signature.params:
+        if p.type in ARRAYS:  # its length here, its elements after the fixed slots
+            value = values.get(p.name, p.default)
+            if value is REQUIRED or value is None:
+                raise ValueError(f"{name} needs the argument {p.name!r} (it has no default)")
+            if callable(value):
+                raise ValueError(f"{name}: {p.name} must be constant (one array for all "
+                                 "lanes), not a function of the state")
+            a = np.asarray(value, dtype=np.float64)
+            k = ARRAYS[p.type]
+            a = a.reshape(-1, k) if (a.ndim == 2 and a.shape[1] == k) or k == 1 else None
+            if a is None or a.shape[0] < 1:
+                raise ValueError(f"{name}: {p.name} must be a non-empty array of "
+                                 f"{p.type[:-2]} values (shape (N, {k})), got shape "
+                                 f"{np.shape(value)}")
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name}: {p.name} must be finite")
+            cols.append(np.full((1, 1), float(a.shape[0])))
+            tail.append(a.reshape(1, -1))
+            continue
         if p.type == "scatter_mode":
             mode = values.get(p.name, p.default)
             mode = getattr(mode, "value", mode)
@@ -250,7 +269,7 @@ def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int
         cols.append(a)
     if values.get("thin_walled", False):
         flags |= THIN_WALLED
-    return _stack(cols), flags
+    return _stack(cols + tail), flags
 
 
 def leaf_program(kind: str, op: int, signature: Signature, values: dict, lobes: Lobe,
@@ -365,7 +384,7 @@ def layer_program(op: int, signature: Signature, values: dict, layer, base, norm
     identity = all(np.all(np.abs(a - e) <= 1e-12) for a, e in
                    zip((frame.s, frame.t, frame.n), eye, strict=True))
     columns, flags = pack(signature, dict(values, normal=nrm), name)
-    curve = np.ones(signature.width, dtype=bool)
+    curve = np.ones(columns.shape[1], dtype=bool)  # (an array's elements follow the slots)
     for p in ("weight", "normal"):
         at = signature.offset(p)
         curve[at:at + signature.param(p).width] = False
@@ -714,7 +733,7 @@ def df_class(py_name: str, mdl_name: str, op: int, signature: Signature, lobes=N
 
     params = [p for p in signature.params if p.name != "handle" and p.mdl]
     names = [p.name for p in params]
-    children = [p.name for p in params if p.type in ("bsdf", "edf")]
+    children = [p.name for p in params if p.type in ("bsdf", "edf", "vdf")]
     is_layer = children == ["layer", "base"] and "normal" in names
     extra = []
     if is_layer:

@@ -43,7 +43,14 @@ from render.df.custom_curve_layer import (
 from render.df.diffuse_edf import DiffuseEdf, diffuse_edf
 from render.df.diffuse_reflection_bsdf import DiffuseReflectionBsdf, diffuse_reflection_bsdf
 from render.df.diffuse_transmission_bsdf import DiffuseTransmissionBsdf, diffuse_transmission_bsdf
-from render.df.directional_factor import DirectionalFactor, directional_factor
+from render.df.coat_absorption_factor import CoatAbsorptionFactor, coat_absorption_factor
+from render.df.directional_factor import (
+    DirectionalFactor,
+    DirectionalFactorEdf,
+    directional_factor,
+    directional_factor_edf,
+)
+from render.df.fresnel_factor import FresnelFactor, fresnel_factor
 from render.df.fresnel_layer import (
     ColorFresnelLayer,
     FresnelLayer,
@@ -57,6 +64,13 @@ from render.df.normalized_mix import (
     NormalizedMixEdf,
     color_normalized_mix,
     normalized_mix,
+)
+from render.df.measured_curve_factor import MeasuredCurveFactor, measured_curve_factor
+from render.df.measured_curve_layer import (
+    ColorMeasuredCurveLayer,
+    MeasuredCurveLayer,
+    color_measured_curve_layer,
+    measured_curve_layer,
 )
 from render.df.microfacet_beckmann_smith_bsdf import (
     MicrofacetBeckmannSmithBsdf,
@@ -74,7 +88,15 @@ from render.df.microfacet_ggx_vcavities_bsdf import (
 from render.df.simple_glossy_bsdf import SimpleGlossyBsdf, simple_glossy_bsdf
 from render.df.specular_bsdf import SpecularBsdf, specular_bsdf
 from render.df.spot_edf import SpotEdf, spot_edf
-from render.df.tint import Tint, tint
+from render.df.tint import Tint, TintEdf, TintRt, TintVdf, tint, tint_edf, tint_rt, tint_vdf
+from render.df.unbounded_mix import (
+    ColorUnboundedMix,
+    ColorUnboundedMixEdf,
+    UnboundedMix,
+    UnboundedMixEdf,
+    color_unbounded_mix,
+    unbounded_mix,
+)
 from render.df.weighted_layer import (
     ColorWeightedLayer,
     WeightedLayer,
@@ -148,9 +170,33 @@ __all__ = [
     "ColorClampedMixEdf",
     "color_clamped_mix",
     "Tint",
+    "TintRt",
+    "TintEdf",
+    "TintVdf",
     "tint",
+    "tint_rt",
+    "tint_edf",
+    "tint_vdf",
     "DirectionalFactor",
+    "DirectionalFactorEdf",
     "directional_factor",
+    "directional_factor_edf",
+    "MeasuredCurveLayer",
+    "measured_curve_layer",
+    "ColorMeasuredCurveLayer",
+    "color_measured_curve_layer",
+    "MeasuredCurveFactor",
+    "measured_curve_factor",
+    "FresnelFactor",
+    "fresnel_factor",
+    "CoatAbsorptionFactor",
+    "coat_absorption_factor",
+    "UnboundedMix",
+    "UnboundedMixEdf",
+    "unbounded_mix",
+    "ColorUnboundedMix",
+    "ColorUnboundedMixEdf",
+    "color_unbounded_mix",
     "albedo_estimate",
 ]
 
