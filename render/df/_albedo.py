@@ -100,10 +100,15 @@ def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     )
     sig = module.SIGNATURE
     P = np.zeros((1, sig.width))
-    P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
-    P[0, sig.offset("roughness_v")] = max(rv, ROUGHNESS_NODES[0])
+    names = [p.name for p in sig.params]
+    if "roughness_u" in names:
+        P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
+        P[0, sig.offset("roughness_v")] = max(rv, ROUGHNESS_NODES[0])
+    else:  # an isotropic lobe (sheen_bsdf): one roughness
+        P[0, sig.offset("roughness")] = max(ru, ROUGHNESS_NODES[0])
     P[0, sig.offset("tint") : sig.offset("tint") + 3] = 1.0
-    P[0, sig.offset("tangent_u")] = 1.0
+    if "tangent_u" in names:
+        P[0, sig.offset("tangent_u")] = 1.0
     flags = 0
     if mode is not None:
         flags = MODE_FLAGS[ScatterMode.parse(mode).value]
