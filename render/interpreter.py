@@ -67,6 +67,9 @@ from render.df.microfacet_ggx_smith_bsdf import eval_pdf as _mgs_eval_pdf
 from render.df.microfacet_ggx_smith_bsdf import sample as _mgs_sample
 from render.df.microfacet_ggx_vcavities_bsdf import eval_pdf as _mgv_eval_pdf
 from render.df.microfacet_ggx_vcavities_bsdf import sample as _mgv_sample
+from render.df.measured_bsdf import albedo as _mb_albedo
+from render.df.measured_bsdf import eval_pdf as _mb_eval_pdf
+from render.df.measured_bsdf import sample as _mb_sample
 from render.df.measured_curve_factor import curve_constant as _mcf_constant
 from render.df.measured_curve_factor import scale as _mcf_scale
 from render.df.measured_curve_layer import curve_constant as _mc_curve_constant
@@ -120,6 +123,7 @@ from render.program import (
     O_COAT_ABSORPTION_FACTOR,
     O_DIRECTIONAL_FACTOR_EDF,
     O_FRESNEL_FACTOR,
+    O_MEASURED_BSDF,
     O_MEASURED_CURVE_FACTOR,
     O_MEASURED_CURVE_LAYER,
     O_TINT_EDF,
@@ -212,6 +216,8 @@ def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
         return _wg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_SHEEN:
         return _sh_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_MEASURED_BSDF:
+        return _mb_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_SPECULAR:
         return _sp_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_DIFFUSE_TRANSMISSION:
@@ -242,6 +248,8 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
         return _wg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_SHEEN:
         return _sh_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_MEASURED_BSDF:
+        return _mb_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_SPECULAR:
         return _sp_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_DIFFUSE_TRANSMISSION:
@@ -267,6 +275,8 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _wg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_SHEEN:
         return _sh_albedo(P, row, b, flags, ox, oy, oz, tables, t)
+    if op == O_MEASURED_BSDF:
+        return _mb_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_SPECULAR:
         return _sp_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_DIFFUSE_TRANSMISSION:
