@@ -597,12 +597,13 @@ for _enum_name, _values in (
 _NUMERIC_CONSTANTS = {"PI": math.pi, "TWO_PI": 2.0 * math.pi, "HALF_PI": 0.5 * math.pi}
 #: element types of array constructors ``T[](...)``
 _ARRAY_COMPONENTS = ("bsdf_component", "color_bsdf_component", "edf_component",
-                     "color_edf_component")
+                     "color_edf_component", "vdf_component", "color_vdf_component")
 _ARRAY_ELEMENTS = _ARRAY_COMPONENTS + ("float", "int", "bool", "float2", "float3", "color",
                                        "string")
 #: array parameters that also take another array type (the mixers' edf overloads)
-_ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]",),
-                     "color_bsdf_component[]": ("color_edf_component[]",)}
+_ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]", "vdf_component[]"),
+                     "color_bsdf_component[]": ("color_edf_component[]",
+                                                "color_vdf_component[]")}
 _VECTOR_WIDTH = {"float2": 2, "float3": 3, "color": 3}
 _CONSTRUCTORS = ("float2", "float3", "color", "float", "int", "texture_2d", "bsdf_measurement",
                  "material",

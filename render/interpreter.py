@@ -70,6 +70,7 @@ from render.df.microfacet_ggx_vcavities_bsdf import sample as _mgv_sample
 from render.df.measured_bsdf import albedo as _mb_albedo
 from render.df.measured_bsdf import eval_pdf as _mb_eval_pdf
 from render.df.measured_bsdf import sample as _mb_sample
+from render.df.measured_factor import scale as _mf_scale
 from render.df.measured_curve_factor import curve_constant as _mcf_constant
 from render.df.measured_curve_factor import scale as _mcf_scale
 from render.df.measured_curve_layer import curve_constant as _mc_curve_constant
@@ -125,6 +126,7 @@ from render.program import (
     O_FRESNEL_FACTOR,
     O_MEASURED_BSDF,
     O_MEASURED_CURVE_FACTOR,
+    O_MEASURED_FACTOR,
     O_MEASURED_CURVE_LAYER,
     O_TINT_EDF,
     O_TINT_RT,
@@ -412,8 +414,11 @@ def curve_constant(op, P, row, b, fl):
 
 
 @njit
-def _scale(op, P, row, b, fl, o, i):
-    """A modifier's factor at ``(wo, wi)`` (an edf modifier's at ``wo``)."""
+def _scale(op, P, row, b, fl, o, i, tables, t):
+    """A modifier's factor at ``(wo, wi)`` (an edf modifier's at ``wo``; a node table at
+    ``tables[t:]`` for the measured factor)."""
+    if op == O_MEASURED_FACTOR:
+        return _mf_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2], tables, t)
     if op == O_TINT or op == O_TINT_EDF:
         return _tint_scale(P, row, b, fl, o[0], o[1], o[2], i[0], i[1], i[2])
     if op == O_TINT_RT:
@@ -674,7 +679,8 @@ def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
             ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = s0, s1, s2
         else:  # tint, directional_factor: the factor at the mirror direction
             ws[r + _TMP], ws[r + _TMP + 1], ws[r + _TMP + 2] = -wo[0], -wo[1], wo[2]
-            f0, f1, f2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3])
+            f0, f1, f2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3], tables,
+                                code[k, TABLE])
             c = kids[k0]
             a0 = a1 = a2 = 0.0
             if c != _NO_KID:
@@ -761,7 +767,7 @@ def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
                     if on:
                         pdf += ws[o + _KSEL] * ws[q + _PDF]
             else:
-                f0, f1, f2 = _scale(op, P, row, b, fl, wo, wi)
+                f0, f1, f2 = _scale(op, P, row, b, fl, wo, wi, tables, code[k, TABLE])
                 o = ko + k0 * _KR
                 ws[o + _KF], ws[o + _KF + 1], ws[o + _KF + 2] = f0, f1, f2
                 c = kids[k0]
@@ -966,7 +972,8 @@ def _correction(code, kids, frames, P, tables, row, ws, k, child, which, e0, e1,
             _set_dirs(frames, ws, fo, f0, f1, _FWI, s[0], s[1], s[2])
             fr = fo + code[k, FRAME] * _FR
             g0, g1, g2 = _scale(code[k, OP], P, row, code[k, BASE], code[k, FLAGS],
-                                ws[fr + _FWO:fr + _FWO + 3], ws[fr + _FWI:fr + _FWI + 3])
+                                ws[fr + _FWO:fr + _FWO + 3], ws[fr + _FWI:fr + _FWI + 3],
+                                tables, code[k, TABLE])
         else:
             a = _layer_factors_at(code, kids, frames, P, tables, row, ws, k, f0, f1,
                                   s[0], s[1], s[2])
@@ -1046,7 +1053,8 @@ def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy,
             c = kids[code[k, KID0]]
             if c != _NO_KID:
                 ws[r + _TMP], ws[r + _TMP + 1], ws[r + _TMP + 2] = -wo[0], -wo[1], wo[2]
-                e0, e1, e2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3])
+                e0, e1, e2 = _scale(op, P, row, b, fl, wo, ws[r + _TMP:r + _TMP + 3], tables,
+                                    code[k, TABLE])
                 q = c * _R + _AL
                 a0, a1, a2 = e0 * ws[q], e1 * ws[q + 1], e2 * ws[q + 2]
                 if _scale_varies(op, P, row, b, fl) and not _is_mirror(code, c):
@@ -1094,7 +1102,8 @@ def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, o
             if c != _NO_KID:
                 fr = fo + code[k, FRAME] * _FR
                 wo = ws[fr + _FWO:fr + _FWO + 3]
-                f0, f1, f2 = _scale(op, P, row, code[k, BASE], code[k, FLAGS], wo, wo)
+                f0, f1, f2 = _scale(op, P, row, code[k, BASE], code[k, FLAGS], wo, wo, tables,
+                                    code[k, TABLE])
                 q = c * _R
                 v0, v1, v2 = f0 * ws[q], f1 * ws[q + 1], f2 * ws[q + 2]
                 if _any_pos(v0, v1, v2):

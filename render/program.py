@@ -868,13 +868,13 @@ def check_ior(values: dict) -> None:
 
 
 def mix_class(py_name: str, mdl_name: str, op: int, color: bool, edf: bool,
-              module: str = "render.df") -> type:
-    """The Python class of a mix (``normalized_mix``, ``clamped_mix``, their colour and
-    edf forms) over a list of component structs or ``(weight, df)`` pairs."""
+              module: str = "render.df", vdf: bool = False) -> type:
+    """The Python class of a mix (``normalized_mix``, ``clamped_mix``, their colour, edf
+    and vdf forms) over a list of component structs or ``(weight, df)`` pairs."""
     from render.df._mix import as_components
 
     base_cls = ProgramEdf if edf else ProgramBsdf
-    kind = "edf" if edf else "bsdf"
+    kind = "edf" if edf else ("vdf" if vdf else "bsdf")
 
     def __init__(self, components):  # noqa: N807
         comps = as_components(components, color, f"df::{mdl_name}")
@@ -899,11 +899,17 @@ def mix_class(py_name: str, mdl_name: str, op: int, color: bool, edf: bool,
                                        "mdl_name": mdl_name})
 
 
-def mix_dispatch(components, bsdf_cls: type, edf_cls: type):
-    """A mix of bsdf components, or of edf components (MDL's overloads)."""
+def mix_dispatch(components, bsdf_cls: type, edf_cls: type, vdf_cls: type | None = None):
+    """A mix of bsdf components, of edf components or of vdf components (MDL's
+    overloads)."""
     from render.bsdf import Edf as _Edf
     from render.df._mix import as_components
 
     comps = as_components(components, bsdf_cls.__name__.startswith("Color"),
                           f"df::{bsdf_cls.mdl_name}")
-    return (edf_cls if comps and comps[0]._kind is _Edf else bsdf_cls)(comps)
+    if comps and comps[0]._kind is _Edf:
+        return edf_cls(comps)
+    if vdf_cls is not None and comps and (comps[0]._vdf or getattr(
+            getattr(comps[0].component, "program", None), "kind", None) == "vdf"):
+        return vdf_cls(comps)
+    return bsdf_cls(comps)

@@ -17,8 +17,12 @@ from render.df._mix import (
     ColorBsdfComponent,
     ColorEdfComponent,
     EdfComponent,
+    ColorVdfComponent,
+    VdfComponent,
     bsdf_component,
     color_bsdf_component,
+    color_vdf_component,
+    vdf_component,
     color_edf_component,
     edf_component,
 )
@@ -29,8 +33,10 @@ from render.df.backscattering_glossy_reflection_bsdf import (
 from render.df.clamped_mix import (
     ClampedMix,
     ClampedMixEdf,
+    ClampedMixVdf,
     ColorClampedMix,
     ColorClampedMixEdf,
+    ColorClampedMixVdf,
     clamped_mix,
     color_clamped_mix,
 )
@@ -60,13 +66,16 @@ from render.df.fresnel_layer import (
 from render.df.normalized_mix import (
     ColorNormalizedMix,
     ColorNormalizedMixEdf,
+    ColorNormalizedMixVdf,
     NormalizedMix,
     NormalizedMixEdf,
+    NormalizedMixVdf,
     color_normalized_mix,
     normalized_mix,
 )
 from render.df._mbsdf import Measurement, MbsdfError, read_mbsdf, write_mbsdf
 from render.df.measured_bsdf import MeasuredBsdf, measured_bsdf
+from render.df.measured_factor import MeasuredFactor, measured_factor
 from render.df.measured_curve_factor import MeasuredCurveFactor, measured_curve_factor
 from render.df.measured_curve_layer import (
     ColorMeasuredCurveLayer,
@@ -95,8 +104,10 @@ from render.df.tint import Tint, TintEdf, TintRt, TintVdf, tint, tint_edf, tint_
 from render.df.unbounded_mix import (
     ColorUnboundedMix,
     ColorUnboundedMixEdf,
+    ColorUnboundedMixVdf,
     UnboundedMix,
     UnboundedMixEdf,
+    UnboundedMixVdf,
     color_unbounded_mix,
     unbounded_mix,
 )
@@ -171,17 +182,25 @@ __all__ = [
     "edf_component",
     "ColorEdfComponent",
     "color_edf_component",
+    "VdfComponent",
+    "vdf_component",
+    "ColorVdfComponent",
+    "color_vdf_component",
     "NormalizedMix",
     "NormalizedMixEdf",
     "normalized_mix",
     "ColorNormalizedMix",
     "ColorNormalizedMixEdf",
+    "NormalizedMixVdf",
+    "ColorNormalizedMixVdf",
     "color_normalized_mix",
     "ClampedMix",
     "ClampedMixEdf",
     "clamped_mix",
     "ColorClampedMix",
     "ColorClampedMixEdf",
+    "ClampedMixVdf",
+    "ColorClampedMixVdf",
     "color_clamped_mix",
     "Tint",
     "TintRt",
@@ -199,6 +218,8 @@ __all__ = [
     "measured_curve_layer",
     "ColorMeasuredCurveLayer",
     "color_measured_curve_layer",
+    "MeasuredFactor",
+    "measured_factor",
     "MeasuredCurveFactor",
     "measured_curve_factor",
     "FresnelFactor",
@@ -210,6 +231,8 @@ __all__ = [
     "unbounded_mix",
     "ColorUnboundedMix",
     "ColorUnboundedMixEdf",
+    "UnboundedMixVdf",
+    "ColorUnboundedMixVdf",
     "color_unbounded_mix",
     "albedo_estimate",
 ]

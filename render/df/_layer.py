@@ -95,6 +95,7 @@ from render.jit import njit
 __all__ = [
     "measured_curve1",
     "scale_cosine",
+    "scale_half_vector",
     "fresnel_curve",
     "fresnel_eta",
     "f82_curve1",
@@ -221,10 +222,10 @@ def measured_curve1(P, row, at, n, c, ch):
 
 
 @njit
-def scale_cosine(wox, woy, woz, wix, wiy, wiz):
-    """``wo.h`` of a directional modifier: ``h`` the reflection half vector with both
-    directions mirrored to ``wo``'s side and a transmitted ``wi`` mirrored through the
-    tangent plane (-1 where ``wo.h < 0``: the factor is 0 there)."""
+def scale_half_vector(wox, woy, woz, wix, wiy, wiz):
+    """``(wo.h, n.h)`` of a directional modifier: ``h`` the reflection half vector with
+    both directions mirrored to ``wo``'s side and a transmitted ``wi`` mirrored through
+    the tangent plane (``wo.h = -1`` where it is negative: the factor is 0 there)."""
     s = -1.0 if woz < 0.0 else 1.0
     oz = woz * s
     iz = wiz * s
@@ -233,5 +234,11 @@ def scale_cosine(wox, woy, woz, wix, wiy, wiz):
         hx, hy, hz = 0.0, 0.0, 1.0
     kh = kc.dot3(wox, woy, oz, hx, hy, hz)
     if not kh >= 0.0:
-        return -1.0
-    return min(kh, 1.0)
+        return -1.0, hz
+    return min(kh, 1.0), min(abs(hz), 1.0)
+
+
+@njit
+def scale_cosine(wox, woy, woz, wix, wiy, wiz):
+    """``wo.h`` of :func:`scale_half_vector` (-1 where negative)."""
+    return scale_half_vector(wox, woy, woz, wix, wiy, wiz)[0]

@@ -40,6 +40,8 @@ __all__ = [
     "ColorUnboundedMix",
     "UnboundedMixEdf",
     "ColorUnboundedMixEdf",
+    "UnboundedMixVdf",
+    "ColorUnboundedMixVdf",
     "SIGNATURE",
     "COLOR_SIGNATURE",
     "EDF_SIGNATURE",
@@ -68,13 +70,19 @@ UnboundedMixEdf = mix_class("UnboundedMixEdf", "unbounded_mix", O_UNBOUNDED_MIX_
 ColorUnboundedMixEdf = mix_class("ColorUnboundedMixEdf", "color_unbounded_mix",
                                  O_UNBOUNDED_MIX_EDF, True, True, module=__name__)
 
+UnboundedMixVdf = mix_class("UnboundedMixVdf", "unbounded_mix", O_UNBOUNDED_MIX, False, False,
+                      module=__name__, vdf=True)
+ColorUnboundedMixVdf = mix_class("ColorUnboundedMixVdf", "color_unbounded_mix", O_UNBOUNDED_MIX, True,
+                           False, module=__name__, vdf=True)
+
 
 def unbounded_mix(components):
     """``df::unbounded_mix``: a Bsdf (or, over ``edf_component`` values, an Edf) whose
     weights are ``max(weight, 0)``, not normalised."""
-    return mix_dispatch(components, UnboundedMix, UnboundedMixEdf)
+    return mix_dispatch(components, UnboundedMix, UnboundedMixEdf, UnboundedMixVdf)
 
 
 def color_unbounded_mix(components):
     """``df::color_unbounded_mix``: per-channel weights, not normalised."""
-    return mix_dispatch(components, ColorUnboundedMix, ColorUnboundedMixEdf)
+    return mix_dispatch(components, ColorUnboundedMix, ColorUnboundedMixEdf,
+                        ColorUnboundedMixVdf)
