@@ -100,6 +100,7 @@ from render.df.sheen_bsdf import SheenBsdf, sheen_bsdf
 from render.df.simple_glossy_bsdf import SimpleGlossyBsdf, simple_glossy_bsdf
 from render.df.specular_bsdf import SpecularBsdf, specular_bsdf
 from render.df.spot_edf import SpotEdf, spot_edf
+from render.df.thin_film import ThinFilm, thin_film
 from render.df.tint import Tint, TintEdf, TintRt, TintVdf, tint, tint_edf, tint_rt, tint_vdf
 from render.df.unbounded_mix import (
     ColorUnboundedMix,
@@ -222,6 +223,8 @@ __all__ = [
     "measured_factor",
     "MeasuredCurveFactor",
     "measured_curve_factor",
+    "ThinFilm",
+    "thin_film",
     "FresnelFactor",
     "fresnel_factor",
     "CoatAbsorptionFactor",

@@ -15,7 +15,9 @@ thin walls, ``ior_inside`` from inside), at ``c = wo.h`` for the reflection half
     a = sqrt((a2b2 + t0) / 2);  Rs = (a2b2 + c^2 - 2 a c) / (a2b2 + c^2 + 2 a c)
     Rp = Rs (c^2 a2b2 + s2^2 - 2 a c s2) / (c^2 a2b2 + s2^2 + 2 a c s2);  F = (Rs + Rp) / 2
 
-With ``kappa = 0`` this is the dielectric Fresnel term of ``fresnel_layer``.  ``eval =
+With ``kappa = 0`` this is the dielectric Fresnel term of ``fresnel_layer``.  Under
+``thin_film`` the factor is the film's reflectance on the conductor
+(:mod:`render.df.thin_film`).  ``eval =
 F(wo.h) base.eval``, the pdf the base's; the factor never exceeds 1.
 """
 
@@ -27,6 +29,7 @@ import numpy as np
 
 from render.df._layer import scale_cosine
 from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
+from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
 from render.program import O_FRESNEL_FACTOR, df_class
 
@@ -37,8 +40,11 @@ SIGNATURE = Signature("bsdf", (
     Param("ior", "color", REQUIRED),
     Param("extinction_coefficient", "color", REQUIRED, clamp=(0.0, None)),
     Param("base", "bsdf", None),
+    *FILM_PARAMS,
 ), context=("ior_outside", "ior_inside"))
 _IOR = SIGNATURE.offset("ior")
+_FILM_D = SIGNATURE.offset("thin_film_thickness")
+_FILM_N = SIGNATURE.offset("thin_film_ior")
 _K = SIGNATURE.offset("extinction_coefficient")
 _OUT = SIGNATURE.offset("ior_outside")
 _IN = SIGNATURE.offset("ior_inside")
@@ -83,6 +89,11 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     e1 = P[row, b + _IN] if inside else P[row, b + _OUT]
     if not e1 > 0.0:
         return 1.0, 1.0, 1.0
+    if P[row, b + _FILM_D] > 0.0:  # under a thin_film: the film on the conductor
+        return film_rgb(c, e1, P[row, b + _FILM_N], P[row, b + _FILM_N + 1],
+                        P[row, b + _FILM_N + 2], P[row, b + _IOR], P[row, b + _IOR + 1],
+                        P[row, b + _IOR + 2], P[row, b + _K], P[row, b + _K + 1],
+                        P[row, b + _K + 2], P[row, b + _FILM_D])
     return (fresnel_conductor(c, P[row, b + _IOR] / e1, P[row, b + _K] / e1),
             fresnel_conductor(c, P[row, b + _IOR + 1] / e1, P[row, b + _K + 1] / e1),
             fresnel_conductor(c, P[row, b + _IOR + 2] / e1, P[row, b + _K + 2] / e1))
