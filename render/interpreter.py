@@ -32,6 +32,9 @@ from render.df.anisotropic_vdf import sample as _vdf_sample
 from render.df.backscattering_glossy_reflection_bsdf import albedo as _bg_albedo
 from render.df.backscattering_glossy_reflection_bsdf import eval_pdf as _bg_eval_pdf
 from render.df.backscattering_glossy_reflection_bsdf import sample as _bg_sample
+from render.df.chiang_hair_bsdf import albedo as _hair_albedo
+from render.df.chiang_hair_bsdf import eval_pdf as _hair_eval_pdf
+from render.df.chiang_hair_bsdf import sample as _hair_sample
 from render.df.clamped_mix import mix_weights as _clamped_weights
 from render.df.coat_absorption_factor import scale as _ca_scale
 from render.df.custom_curve_layer import curve_constant as _cc_curve_constant
@@ -121,6 +124,7 @@ from render.program import (
     NKIDS,
     O_ANISOTROPIC_VDF,
     O_BACKSCATTERING_GLOSSY,
+    O_CHIANG_HAIR,
     O_COAT_ABSORPTION_FACTOR,
     O_DIRECTIONAL_FACTOR_EDF,
     O_FRESNEL_FACTOR,
@@ -220,6 +224,8 @@ def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
         return _sh_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_MEASURED_BSDF:
         return _mb_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
+    if op == O_CHIANG_HAIR:
+        return _hair_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_SPECULAR:
         return _sp_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_DIFFUSE_TRANSMISSION:
@@ -252,6 +258,8 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
         return _sh_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_MEASURED_BSDF:
         return _mb_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
+    if op == O_CHIANG_HAIR:
+        return _hair_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_SPECULAR:
         return _sp_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_DIFFUSE_TRANSMISSION:
@@ -279,6 +287,8 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _sh_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_MEASURED_BSDF:
         return _mb_albedo(P, row, b, flags, ox, oy, oz, tables, t)
+    if op == O_CHIANG_HAIR:
+        return _hair_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_SPECULAR:
         return _sp_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_DIFFUSE_TRANSMISSION:

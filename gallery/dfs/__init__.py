@@ -163,7 +163,8 @@ material = \"\"\"{_expression(name, r, j)}\"\"\"
 
 def write_mbsdf_files(folder: Path | None = None) -> list[Path]:
     """The measured_bsdf scene's files: reciprocal Phong lobes about the mirror
-    direction (exponents 200, 25, 6: the page's three roughnesses), 24 x 24 x 48 steps."""
+    direction (exponents 200, 25, 6: the page's three roughnesses), 24 x 24 x 48 scalar
+    steps (110 kB each)."""
     from render.df._mbsdf import write_mbsdf
 
     folder = folder or scenes_dir()
@@ -174,8 +175,7 @@ def write_mbsdf_files(folder: Path | None = None) -> list[Path]:
     out = []
     for k, n in enumerate((200.0, 25.0, 6.0)):
         f = 0.85 * (n + 2) / (2 * np.pi) * np.maximum(c, 0.0) ** n
-        rgb = f[..., None] * np.array([0.95, 0.9, 0.8])
-        out.append(write_mbsdf(folder / f"phong_{k}.mbsdf", reflection=rgb,
+        out.append(write_mbsdf(folder / f"phong_{k}.mbsdf", reflection=f, rgb=False,
                                metadata={"name": f"Phong lobe, exponent {n:g}",
                                          "source": "gallery/dfs write_mbsdf_files"}))
     return out

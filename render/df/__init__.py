@@ -30,6 +30,7 @@ from render.df.backscattering_glossy_reflection_bsdf import (
     BackscatteringGlossyReflectionBsdf,
     backscattering_glossy_reflection_bsdf,
 )
+from render.df.chiang_hair_bsdf import ChiangHairBsdf, chiang_hair_bsdf
 from render.df.clamped_mix import (
     ClampedMix,
     ClampedMixEdf,
@@ -140,6 +141,8 @@ __all__ = [
     "simple_glossy_bsdf",
     "BackscatteringGlossyReflectionBsdf",
     "backscattering_glossy_reflection_bsdf",
+    "ChiangHairBsdf",
+    "chiang_hair_bsdf",
     "MeasuredBsdf",
     "measured_bsdf",
     "Measurement",
