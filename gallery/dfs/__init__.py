@@ -121,9 +121,11 @@ radiance = [0.25, 0.25, 0.25]
 
 [[objects]]
 name = "floor"
-surface = { type = "plane", size = [10.0, 10.0], origin = [-5.0, 0.0, 5.0], axis_u = [1.0, 0.0, 0.0], axis_v = [0.0, 0.0, -1.0] }
-material = "material(surface: material_surface(scattering: df::diffuse_reflection_bsdf(tint: color(0.45))))"
 """
+_STAGE += ('surface = { type = "plane", size = [10.0, 10.0], origin = [-5.0, 0.0, 5.0], '
+           'axis_u = [1.0, 0.0, 0.0], axis_v = [0.0, 0.0, -1.0] }\n'
+           'material = "material(surface: material_surface(scattering: '
+           'df::diffuse_reflection_bsdf(tint: color(0.45))))"\n')
 
 
 def scenes_dir() -> Path:

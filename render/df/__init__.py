@@ -12,19 +12,20 @@ Conventions (directions, sides, IORs): :mod:`render.frame`; interfaces:
 
 from render.df._combine import albedo_estimate
 from render.df._common import ScatterMode
+from render.df._mbsdf import MbsdfError, Measurement, read_mbsdf, write_mbsdf
 from render.df._mix import (
     BsdfComponent,
     ColorBsdfComponent,
     ColorEdfComponent,
-    EdfComponent,
     ColorVdfComponent,
+    EdfComponent,
     VdfComponent,
     bsdf_component,
     color_bsdf_component,
-    color_vdf_component,
-    vdf_component,
     color_edf_component,
+    color_vdf_component,
     edf_component,
+    vdf_component,
 )
 from render.df.backscattering_glossy_reflection_bsdf import (
     BackscatteringGlossyReflectionBsdf,
@@ -41,6 +42,7 @@ from render.df.clamped_mix import (
     clamped_mix,
     color_clamped_mix,
 )
+from render.df.coat_absorption_factor import CoatAbsorptionFactor, coat_absorption_factor
 from render.df.custom_curve_layer import (
     ColorCustomCurveLayer,
     CustomCurveLayer,
@@ -50,7 +52,6 @@ from render.df.custom_curve_layer import (
 from render.df.diffuse_edf import DiffuseEdf, diffuse_edf
 from render.df.diffuse_reflection_bsdf import DiffuseReflectionBsdf, diffuse_reflection_bsdf
 from render.df.diffuse_transmission_bsdf import DiffuseTransmissionBsdf, diffuse_transmission_bsdf
-from render.df.coat_absorption_factor import CoatAbsorptionFactor, coat_absorption_factor
 from render.df.directional_factor import (
     DirectionalFactor,
     DirectionalFactorEdf,
@@ -64,19 +65,7 @@ from render.df.fresnel_layer import (
     color_fresnel_layer,
     fresnel_layer,
 )
-from render.df.normalized_mix import (
-    ColorNormalizedMix,
-    ColorNormalizedMixEdf,
-    ColorNormalizedMixVdf,
-    NormalizedMix,
-    NormalizedMixEdf,
-    NormalizedMixVdf,
-    color_normalized_mix,
-    normalized_mix,
-)
-from render.df._mbsdf import Measurement, MbsdfError, read_mbsdf, write_mbsdf
 from render.df.measured_bsdf import MeasuredBsdf, measured_bsdf
-from render.df.measured_factor import MeasuredFactor, measured_factor
 from render.df.measured_curve_factor import MeasuredCurveFactor, measured_curve_factor
 from render.df.measured_curve_layer import (
     ColorMeasuredCurveLayer,
@@ -84,6 +73,7 @@ from render.df.measured_curve_layer import (
     color_measured_curve_layer,
     measured_curve_layer,
 )
+from render.df.measured_factor import MeasuredFactor, measured_factor
 from render.df.microfacet_beckmann_smith_bsdf import (
     MicrofacetBeckmannSmithBsdf,
     microfacet_beckmann_smith_bsdf,
@@ -96,6 +86,16 @@ from render.df.microfacet_ggx_smith_bsdf import MicrofacetGgxSmithBsdf, microfac
 from render.df.microfacet_ggx_vcavities_bsdf import (
     MicrofacetGgxVcavitiesBsdf,
     microfacet_ggx_vcavities_bsdf,
+)
+from render.df.normalized_mix import (
+    ColorNormalizedMix,
+    ColorNormalizedMixEdf,
+    ColorNormalizedMixVdf,
+    NormalizedMix,
+    NormalizedMixEdf,
+    NormalizedMixVdf,
+    color_normalized_mix,
+    normalized_mix,
 )
 from render.df.sheen_bsdf import SheenBsdf, sheen_bsdf
 from render.df.simple_glossy_bsdf import SimpleGlossyBsdf, simple_glossy_bsdf

@@ -66,11 +66,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from render.bsdf import (
     Lobe,
 )
-import numpy as np
-
 from render.df import _kernel_common as kc
 from render.df._albedo import lane_table_albedo, lane_table_average
 from render.df._signature import (
@@ -87,7 +87,7 @@ from render.jit import njit
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
            "mf_sample_dir", "GGX", "BECKMANN", "VCAVITIES", "SMITH", "mf_d", "mf_smith_g1",
            "mf_sample_d_cos", "mf_sample_visible", "mf_eval_pdf", "mf_sample", "mf_albedo",
-           "ms_eval", "ms_sample", "microfacet_signature"]
+           "ms_eval", "ms_choice", "ms_on", "ms_albedo", "microfacet_signature"]
 
 _TR = int(Lobe.GLOSSY_TRANSMISSION)
 _RE = int(Lobe.GLOSSY_REFLECTION)

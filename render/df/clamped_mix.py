@@ -95,8 +95,8 @@ ColorClampedMixEdf = mix_class("ColorClampedMixEdf", "color_clamped_mix", O_CLAM
 
 ClampedMixVdf = mix_class("ClampedMixVdf", "clamped_mix", O_CLAMPED_MIX, False, False,
                       module=__name__, vdf=True)
-ColorClampedMixVdf = mix_class("ColorClampedMixVdf", "color_clamped_mix", O_CLAMPED_MIX, True,
-                           False, module=__name__, vdf=True)
+ColorClampedMixVdf = mix_class("ColorClampedMixVdf", "color_clamped_mix", O_CLAMPED_MIX,
+                           True, False, module=__name__, vdf=True)
 
 
 def clamped_mix(components):

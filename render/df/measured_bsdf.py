@@ -40,7 +40,7 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._mbsdf import Measurement, MbsdfError, measurement_table, read_mbsdf
+from render.df._mbsdf import MbsdfError, Measurement, measurement_table, read_mbsdf
 from render.df._signature import (
     MODE_FLAGS,
     MODE_MASK,

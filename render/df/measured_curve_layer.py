@@ -1,4 +1,4 @@
-"""MDL ``df::measured_curve_layer`` and ``df::color_measured_curve_layer``: a layer weighted by a measured curve.
+"""MDL ``df::measured_curve_layer`` and its colour form: a layer weighted by a measured curve.
 
 MDL signatures::
 

@@ -13,15 +13,16 @@ roughness_v`` across it (clamped at 1e-7: roughness 0 is a near-mirror, not a de
 
     D(h) = exp(-(h_t^2/alpha_u^2 + h_b^2/alpha_v^2) / h_n^2) / (pi alpha_u alpha_v h_n^4)
 
-Smith masking, uncorrelated: ``G2 = G1(wo) G1(wi)`` for reflection and
-refraction, ``G1 = 1 / (1 + Lambda)``; sampled through the distribution of visible
-normals (the stretched 1-D visible-slope inversion of Heitz & d'Eon 2014, solved by a bracketed Newton iteration), so the sample weight is ``tint G1(wi)``.  Scatter modes as every glossy lobe: **no Fresnel** in
-``scatter_reflect`` and ``scatter_transmit`` (weight ``tint``; transmit reflects only on
-total internal reflection), dielectric Fresnel on the renderer's IOR pair in
-``scatter_reflect_transmit``; thin-walled transmission mirrors the reflection.
-``multiscatter_tint`` adds the energy-compensation lobe of :mod:`render.df._microfacet`
-(reflect and reflect_transmit modes; lossless for a white lobe with
-``multiscatter_tint = 1`` to the albedo table's accuracy).
+Smith masking, uncorrelated: ``G2 = G1(wo) G1(wi)`` for reflection and refraction, ``G1
+= 1 / (1 + Lambda)``; sampled through the distribution of visible normals (the stretched
+1-D visible-slope inversion of Heitz & d'Eon 2014, solved by a bracketed Newton
+iteration), so the sample weight is ``tint G1(wi)``.  Scatter modes as every glossy
+lobe: **no Fresnel** in ``scatter_reflect`` and ``scatter_transmit`` (weight ``tint``;
+transmit reflects only on total internal reflection), dielectric Fresnel on the
+renderer's IOR pair in ``scatter_reflect_transmit``; thin-walled transmission mirrors
+the reflection. ``multiscatter_tint`` adds the energy-compensation lobe of
+:mod:`render.df._microfacet` (reflect and reflect_transmit modes; lossless for a white
+lobe with ``multiscatter_tint = 1`` to the albedo table's accuracy).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
 and :func:`albedo` are the generic microfacet kernels of :mod:`render.df._microfacet`
@@ -29,11 +30,12 @@ with this df's distribution and masking; ``eval_pdf``, ``sample`` and ``albedo``
 the node's albedo table (``T``, ``t``: :func:`albedo_table`), which holds ``E`` and
 ``E_avg`` for the compensation.
 
-Departures from libbsdf: ``Lambda`` is exact (``erfc``), not Walter's rational fit (within 0.35 % of it), so the pdf is the sampler's density; the refraction pdf includes the ``eta2^2``
-Jacobian (see ``_microfacet``).
+Departures from libbsdf: ``Lambda`` is exact (``erfc``), not Walter's rational fit
+(within 0.35 % of it), so the pdf is the sampler's density; the refraction pdf includes
+the ``eta2^2`` Jacobian (see ``_microfacet``).
 
-References: Walter et al. (2007); Heitz & d'Eon, "Importance sampling microfacet-based BSDFs using the distribution of visible normals" (2014).
-"""
+References: Walter et al. (2007); Heitz & d'Eon, "Importance sampling microfacet-based
+BSDFs using the distribution of visible normals" (2014)."""
 
 from __future__ import annotations
 
@@ -100,7 +102,8 @@ def albedo_table(row, flags: int):
 # --- the Python class ------------------------------------------------------------------
 
 MicrofacetBeckmannSmithBsdf = df_class(
-    "MicrofacetBeckmannSmithBsdf", "microfacet_beckmann_smith_bsdf", O_MICROFACET_BECKMANN_SMITH, SIGNATURE,
+    "MicrofacetBeckmannSmithBsdf", "microfacet_beckmann_smith_bsdf", O_MICROFACET_BECKMANN_SMITH,
+    SIGNATURE,
     {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
      "scatter_reflect_transmit": Lobe.GLOSSY},
     albedo_table=albedo_table, module=__name__)

@@ -14,14 +14,15 @@ roughness_v`` across it (clamped at 1e-7: roughness 0 is a near-mirror, not a de
     D(h) = exp(-(h_t^2/alpha_u^2 + h_b^2/alpha_v^2) / h_n^2) / (pi alpha_u alpha_v h_n^4)
 
 V-cavities masking (``G1(k) = min(1, 2 |n.h| |n.k| / |k.h|)``, ``G2 = min`` for
-reflection, ``max(G1 + G1 - 1, 0)`` for refraction); half vectors sampled from ``D (n.h)``
-in closed form (``tan^2 theta = -log(1 - u) / k``), then the v-cavities flip (Heitz & d'Eon 2014).  Scatter modes as every glossy lobe: **no Fresnel** in
+reflection, ``max(G1 + G1 - 1, 0)`` for refraction); half vectors sampled from ``D
+(n.h)`` in closed form (``tan^2 theta = -log(1 - u) / k``), then the v-cavities flip
+(Heitz & d'Eon 2014).  Scatter modes as every glossy lobe: **no Fresnel** in
 ``scatter_reflect`` and ``scatter_transmit`` (weight ``tint``; transmit reflects only on
 total internal reflection), dielectric Fresnel on the renderer's IOR pair in
 ``scatter_reflect_transmit``; thin-walled transmission mirrors the reflection.
 ``multiscatter_tint`` adds the energy-compensation lobe of :mod:`render.df._microfacet`
-(reflect and reflect_transmit modes; lossless for a white lobe with
-``multiscatter_tint = 1`` to the albedo table's accuracy).
+(reflect and reflect_transmit modes; lossless for a white lobe with ``multiscatter_tint
+= 1`` to the albedo table's accuracy).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
 and :func:`albedo` are the generic microfacet kernels of :mod:`render.df._microfacet`
@@ -100,7 +101,9 @@ def albedo_table(row, flags: int):
 # --- the Python class ------------------------------------------------------------------
 
 MicrofacetBeckmannVcavitiesBsdf = df_class(
-    "MicrofacetBeckmannVcavitiesBsdf", "microfacet_beckmann_vcavities_bsdf", O_MICROFACET_BECKMANN_VCAVITIES, SIGNATURE,
+    "MicrofacetBeckmannVcavitiesBsdf", "microfacet_beckmann_vcavities_bsdf",
+    O_MICROFACET_BECKMANN_VCAVITIES,
+    SIGNATURE,
     {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
      "scatter_reflect_transmit": Lobe.GLOSSY},
     albedo_table=albedo_table, module=__name__)

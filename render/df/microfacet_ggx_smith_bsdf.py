@@ -13,15 +13,15 @@ roughness_v`` across it (clamped at 1e-7: roughness 0 is a near-mirror, not a de
 
     D(h) = 1 / (pi alpha_u alpha_v (h_t^2/alpha_u^2 + h_b^2/alpha_v^2 + h_n^2)^2)
 
-Smith masking, uncorrelated: ``G2 = G1(wo) G1(wi)`` for reflection and
-refraction, ``G1 = 1 / (1 + Lambda)``; sampled through the distribution of visible
-normals (Heitz 2018), so the sample weight is ``tint G1(wi)``.  Scatter modes as every glossy lobe: **no Fresnel** in
-``scatter_reflect`` and ``scatter_transmit`` (weight ``tint``; transmit reflects only on
-total internal reflection), dielectric Fresnel on the renderer's IOR pair in
-``scatter_reflect_transmit``; thin-walled transmission mirrors the reflection.
+Smith masking, uncorrelated: ``G2 = G1(wo) G1(wi)`` for reflection and refraction, ``G1
+= 1 / (1 + Lambda)``; sampled through the distribution of visible normals (Heitz 2018),
+so the sample weight is ``tint G1(wi)``.  Scatter modes as every glossy lobe: **no
+Fresnel** in ``scatter_reflect`` and ``scatter_transmit`` (weight ``tint``; transmit
+reflects only on total internal reflection), dielectric Fresnel on the renderer's IOR
+pair in ``scatter_reflect_transmit``; thin-walled transmission mirrors the reflection.
 ``multiscatter_tint`` adds the energy-compensation lobe of :mod:`render.df._microfacet`
-(reflect and reflect_transmit modes; lossless for a white lobe with
-``multiscatter_tint = 1`` to the albedo table's accuracy).
+(reflect and reflect_transmit modes; lossless for a white lobe with ``multiscatter_tint
+= 1`` to the albedo table's accuracy).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
 and :func:`albedo` are the generic microfacet kernels of :mod:`render.df._microfacet`
@@ -32,8 +32,8 @@ the node's albedo table (``T``, ``t``: :func:`albedo_table`), which holds ``E`` 
 Departures from libbsdf: the refraction pdf includes the ``eta2^2``
 Jacobian (see ``_microfacet``).
 
-References: Walter et al., "Microfacet models for refraction through rough surfaces" (2007); Heitz, "Sampling the GGX distribution of visible normals" (JCGT 2018).
-"""
+References: Walter et al., "Microfacet models for refraction through rough surfaces"
+(2007); Heitz, "Sampling the GGX distribution of visible normals" (JCGT 2018)."""
 
 from __future__ import annotations
 
@@ -100,7 +100,8 @@ def albedo_table(row, flags: int):
 # --- the Python class ------------------------------------------------------------------
 
 MicrofacetGgxSmithBsdf = df_class(
-    "MicrofacetGgxSmithBsdf", "microfacet_ggx_smith_bsdf", O_MICROFACET_GGX_SMITH, SIGNATURE,
+    "MicrofacetGgxSmithBsdf", "microfacet_ggx_smith_bsdf", O_MICROFACET_GGX_SMITH,
+    SIGNATURE,
     {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
      "scatter_reflect_transmit": Lobe.GLOSSY},
     albedo_table=albedo_table, module=__name__)

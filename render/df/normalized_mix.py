@@ -98,8 +98,8 @@ ColorNormalizedMixEdf = mix_class("ColorNormalizedMixEdf", "color_normalized_mix
 
 NormalizedMixVdf = mix_class("NormalizedMixVdf", "normalized_mix", O_NORMALIZED_MIX, False, False,
                       module=__name__, vdf=True)
-ColorNormalizedMixVdf = mix_class("ColorNormalizedMixVdf", "color_normalized_mix", O_NORMALIZED_MIX, True,
-                           False, module=__name__, vdf=True)
+ColorNormalizedMixVdf = mix_class("ColorNormalizedMixVdf", "color_normalized_mix", O_NORMALIZED_MIX,
+                           True, False, module=__name__, vdf=True)
 
 
 def normalized_mix(components):

@@ -1,4 +1,4 @@
-"""MDL ``df::sheen_bsdf``: a retro-reflective sheen lobe (Conty & Kulla's "Charlie") over a multiscatter bsdf.
+"""MDL ``df::sheen_bsdf``: a sheen lobe (Conty & Kulla's "Charlie") over a multiscatter bsdf.
 
 MDL signature (1.10)::
 
@@ -38,8 +38,15 @@ import numpy as np
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import lanes_table, node_table
-from render.df._microfacet import mf_finish, mf_geometry, mf_sample_dir, ms_albedo, ms_choice
-from render.df._microfacet import ms_eval, ms_on
+from render.df._microfacet import (
+    mf_finish,
+    mf_geometry,
+    mf_sample_dir,
+    ms_albedo,
+    ms_choice,
+    ms_eval,
+    ms_on,
+)
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.program import (
@@ -271,8 +278,8 @@ DEFAULT_MULTISCATTER = _DefaultDiffuse()
 
 
 def _is_default_diffuse(bsdf) -> bool:
-    from render.df.diffuse_reflection_bsdf import DiffuseReflectionBsdf
     from render.df.diffuse_reflection_bsdf import SIGNATURE as DSIG
+    from render.df.diffuse_reflection_bsdf import DiffuseReflectionBsdf
 
     if not isinstance(bsdf, DiffuseReflectionBsdf) or bsdf.program.code.shape[0] != 1:
         return False

@@ -72,8 +72,8 @@ ColorUnboundedMixEdf = mix_class("ColorUnboundedMixEdf", "color_unbounded_mix",
 
 UnboundedMixVdf = mix_class("UnboundedMixVdf", "unbounded_mix", O_UNBOUNDED_MIX, False, False,
                       module=__name__, vdf=True)
-ColorUnboundedMixVdf = mix_class("ColorUnboundedMixVdf", "color_unbounded_mix", O_UNBOUNDED_MIX, True,
-                           False, module=__name__, vdf=True)
+ColorUnboundedMixVdf = mix_class("ColorUnboundedMixVdf", "color_unbounded_mix", O_UNBOUNDED_MIX,
+                           True, False, module=__name__, vdf=True)
 
 
 def unbounded_mix(components):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from render_df_cases import DfCase, check_consistency, check_no_nan, random_dirs
+from render_df_cases import DfCase, check_consistency, check_no_nan
 
 from render import df
 from render.testing import chi2_test, direction, sample_lanes, sphere_integral

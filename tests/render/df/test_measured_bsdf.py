@@ -10,11 +10,9 @@ import pytest
 from render_df_cases import (
     WOS,
     DfCase,
-    case_ids,
     check_consistency,
     check_no_nan,
     check_reciprocity,
-    pair_ids,
     per_wo,
     random_dirs,
 )

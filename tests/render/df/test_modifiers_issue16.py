@@ -66,8 +66,9 @@ CASES = [
     CombinerCase("coat-absorption-transmit", lambda: df.coat_absorption_factor(
         1.3, (1.0, 0.2, 3.0), 0.5, T()), "diffuse", transmits=True,
         albedo_tol=COMBINED_ALBEDO_TOL, reciprocal=False),
-    CombinerCase("measured-curve-factor", lambda: df.measured_curve_factor(CURVE, G(roughness_u=0.5)),
-                 "glossy", albedo_tol=COMBINED_ALBEDO_TOL, chi2_wos=((0.0, 0.0),)),
+    CombinerCase("measured-curve-factor",
+                 lambda: df.measured_curve_factor(CURVE, G(roughness_u=0.5)), "glossy",
+                 albedo_tol=COMBINED_ALBEDO_TOL, chi2_wos=((0.0, 0.0),)),
     CombinerCase("measured-curve-factor-one", lambda: df.measured_curve_factor(
         np.array([[0.6, 0.3, 1.0]]), D()), "diffuse"),
 ]
