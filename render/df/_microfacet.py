@@ -73,6 +73,7 @@ from render.bsdf import (
 )
 from render.df import _kernel_common as kc
 from render.df._albedo import lane_table_albedo, lane_table_average
+from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.df._signature import (
     MODE_MASK,
     REFLECT,
@@ -87,7 +88,8 @@ from render.jit import njit
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
            "mf_sample_dir", "GGX", "BECKMANN", "VCAVITIES", "SMITH", "mf_d", "mf_smith_g1",
            "mf_sample_d_cos", "mf_sample_visible", "mf_eval_pdf", "mf_sample", "mf_albedo",
-           "ms_eval", "ms_choice", "ms_on", "ms_albedo", "microfacet_signature"]
+           "ms_eval", "ms_choice", "ms_on", "ms_albedo", "microfacet_signature", "mf_film_event",
+           "mf_film_on"]
 
 _TR = int(Lobe.GLOSSY_TRANSMISSION)
 _RE = int(Lobe.GLOSSY_REFLECTION)
@@ -201,7 +203,32 @@ def mf_finish(D, refr, nk1, kh1, kh2, eta1, eta2, P, g1_1, G2, t0, t1, t2):
 
 
 @njit
-def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip=True):
+def mf_film_event(flags, kh1, eta1, eta2, d, f0, f1, f2, tr):
+    """A ``thin_film`` on a ``scatter_reflect_transmit`` lobe (``d > 0``): the film's RGB
+    reflectance at ``kh1`` replaces Fresnel.  Returns ``(P, m0, m1, m2)``: the event's
+    probability (reflection: the channels' mean ``F``) and the per-channel factors
+    ``F_c / P`` (``(1 - F_c) / (1 - P)`` for transmission)."""
+    r0, r1, r2 = film_rgb(kh1, eta1, f0, f1, f2, eta2, eta2, eta2, 0.0, 0.0, 0.0, d)
+    pr = (r0 + r1 + r2) / 3.0
+    if tr:
+        q = 1.0 - pr
+        if not q > 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        return q, (1.0 - r0) / q, (1.0 - r1) / q, (1.0 - r2) / q
+    if not pr > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return pr, r0 / pr, r1 / pr, r2 / pr
+
+
+@njit
+def mf_film_on(flags, d):
+    """Whether a film acts on this lobe: ``scatter_reflect_transmit`` and ``d > 0``."""
+    return (flags & _MODE_MASK) == 2 and d > 0.0
+
+
+@njit
+def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip=True, d=0.0,
+                  f0=1.0, f1=1.0, f2=1.0):
     """microfacet sampling from a half vector (local frame) to ``wi``, for an oriented
     lane: with ``vflip`` the half vector was drawn from ``D (n.h)`` and the v-cavities
     flip makes it visible; without, it was drawn from the visible normals already (the
@@ -231,7 +258,10 @@ def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip=True):
     c = kc.dot3(wox, woy, woz, hx, hy, hz)
     if not c > 0.0:
         return False, 0.0, 0.0, 0.0
-    refl = u1 < mf_p_reflect(mode, thin, c, eta1, eta2)
+    if mf_film_on(flags, d):
+        refl = u1 < mf_film_event(flags, c, eta1, eta2, d, f0, f1, f2, False)[0]
+    else:
+        refl = u1 < mf_p_reflect(mode, thin, c, eta1, eta2)
     two_c = 2.0 * c
     wix = two_c * hx - wox
     wiy = two_c * hy - woy
@@ -458,10 +488,13 @@ def microfacet_signature() -> Signature:
         Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
         Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
         Param("handle", "string", "", uniform=True),
+        *FILM_PARAMS,
     ), context=("ior_outside", "ior_inside"))
 
 
 _SIG = microfacet_signature()
+_FILM_D = _SIG.offset("thin_film_thickness")
+_FILM_N = _SIG.offset("thin_film_ior")
 _RU = _SIG.offset("roughness_u")
 _RV = _SIG.offset("roughness_v")
 _TINT = _SIG.offset("tint")
@@ -566,8 +599,16 @@ def _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, au, av, t
     if not G2 > 0.0:
         return 0.0, 0.0, 0.0, 0.0
     D = mf_d(dist, au, av, ht, hb, hz)
-    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, G2,
-                     P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2])
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    d = P[row, b + _FILM_D]
+    if mf_film_on(flags, d):
+        p_ev, m0, m1, m2 = mf_film_event(flags, kh1, eta1, eta2, d, P[row, b + _FILM_N],
+                                         P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2],
+                                         wiz < 0.0)
+        if not p_ev > 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        t0, t1, t2 = t0 * m0, t1 * m1, t2 * m2
+    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, G2, t0, t1, t2)
 
 
 @njit
@@ -582,7 +623,8 @@ def _single_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, au
         ht, hb, hn = mf_sample_visible(dist, au, av, wox * tx + woy * ty, wox * ty - woy * tx,
                                        woz, u2x, u2y)
     return mf_sample_dir(flags, eta1, eta2, wox, woy, woz, ht * tx + hb * ty,
-                         ht * ty - hb * tx, hn, u1, mask == VCAVITIES)
+                         ht * ty - hb * tx, hn, u1, mask == VCAVITIES, P[row, b + _FILM_D],
+                         P[row, b + _FILM_N], P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2])
 
 
 @njit

@@ -54,6 +54,8 @@ from render.df import _kernel_common as kc
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     mf_albedo,
+    mf_film_event,
+    mf_film_on,
     mf_finish,
     mf_geometry,
     mf_sample_dir,
@@ -82,6 +84,8 @@ _RU = SIGNATURE.offset("roughness_u")
 _RV = SIGNATURE.offset("roughness_v")
 _TINT = SIGNATURE.offset("tint")
 _MS = SIGNATURE.offset("multiscatter_tint")
+_FILM_D = SIGNATURE.offset("thin_film_thickness")
+_FILM_N = SIGNATURE.offset("thin_film_ior")
 _TANGENT = SIGNATURE.offset("tangent_u")
 _IOR_OUT = SIGNATURE.offset("ior_outside")
 _IOR_IN = SIGNATURE.offset("ior_inside")
@@ -175,8 +179,16 @@ def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, t
     ht = hx * tx + hy * ty
     hb = hx * ty - hy * tx
     D = as_d_cos(e_u, e_v, norm, ht, hb, hz) / hz
-    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, g2,
-                     P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2])
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    d = P[row, b + _FILM_D]
+    if mf_film_on(flags, d):  # a thin_film replaces Fresnel (render.df.thin_film)
+        p_ev, m0, m1, m2 = mf_film_event(flags, kh1, eta1, eta2, d, P[row, b + _FILM_N],
+                                         P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2],
+                                         wiz < 0.0)
+        if not p_ev > 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        t0, t1, t2 = t0 * m0, t1 * m1, t2 * m2
+    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, g2, t0, t1, t2)
 
 
 @njit
@@ -214,7 +226,9 @@ def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, e_u, e_v, tx, 
     """half vector from D (n.h), in the anisotropy frame, then into the local frame."""
     ht, hb, hn = as_sample(e_u, e_v, u2x, u2y)
     return mf_sample_dir(flags, eta1, eta2, wox, woy, woz,
-                         ht * tx + hb * ty, ht * ty - hb * tx, hn, u1)
+                         ht * tx + hb * ty, ht * ty - hb * tx, hn, u1, True,
+                         P[row, b + _FILM_D], P[row, b + _FILM_N], P[row, b + _FILM_N + 1],
+                         P[row, b + _FILM_N + 2])
 
 
 @njit

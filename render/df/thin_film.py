@@ -23,10 +23,13 @@ taken as a piecewise constant spectrum (blue below 494 nm, green to 588 nm, red 
 **Propagation** (spec Appendix H): the film acts on the Fresnel term of its direct
 argument, and passes through ``tint``, the mixers and the weighted and measured layers
 and factors to the dfs below them.  Implemented here for ``fresnel_layer`` /
-``color_fresnel_layer`` (the layer's curve over the layer's IOR) and ``fresnel_factor``
-(a film on the conductor); on every other df the film is a no-op: diffuse, sheen and
-measured lobes as the spec says, and, **not yet**, the Fresnel split of the specular and
-glossy lobes in ``scatter_reflect_transmit`` and the custom curves
+``color_fresnel_layer`` (the layer's curve over the layer's IOR), ``fresnel_factor`` (a
+film on the conductor) and the specular and glossy lobes in ``scatter_reflect_transmit``
+(the film over the material's IOR replaces their Fresnel split: the event is chosen by
+the channels' mean reflectance and weighted ``F_c / P`` or ``(1 - F_c) / (1 - P)``; their
+albedo tables stay the film-less lobe's, within about 1 % of the filmed one's).  On
+every other df the film is a no-op: diffuse, sheen and measured lobes and plain
+reflect/transmit lobes as the spec says, and, **not yet**, the custom curves
 (``custom_curve_layer``, ``directional_factor``) that libbsdf turns into an IOR.
 
 The film is a bind-time rewrite of the program (:class:`ThinFilm`): it writes its
@@ -136,7 +139,9 @@ def film_rgb(c, n0, f0, f1, f2, s0, s1, s2, k0, k1, k2, d):
 def _film_ops():
     from render import program as pg
 
-    stop = {pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR}
+    stop = {pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_SPECULAR, pg.O_SIMPLE_GLOSSY,
+            pg.O_MICROFACET_GGX_SMITH, pg.O_MICROFACET_BECKMANN_SMITH,
+            pg.O_MICROFACET_GGX_VCAVITIES, pg.O_MICROFACET_BECKMANN_VCAVITIES}
     through = {pg.O_TINT, pg.O_TINT_RT, pg.O_NORMALIZED_MIX, pg.O_CLAMPED_MIX,
                pg.O_UNBOUNDED_MIX, pg.O_WEIGHTED_LAYER, pg.O_MEASURED_CURVE_LAYER,
                pg.O_MEASURED_CURVE_FACTOR, pg.O_MEASURED_FACTOR}
@@ -150,8 +155,12 @@ def _film_offset(op) -> int:
 
     if op == pg.O_FRESNEL_LAYER:
         sig = sys.modules["render.df.fresnel_layer"].COLOR_SIGNATURE
-    else:
+    elif op == pg.O_FRESNEL_FACTOR:
         sig = sys.modules["render.df.fresnel_factor"].SIGNATURE
+    elif op == pg.O_SPECULAR:
+        sig = sys.modules["render.df.specular_bsdf"].SIGNATURE
+    else:  # the glossy lobes share MDL's glossy signature
+        sig = sys.modules["render.df._microfacet"].microfacet_signature()
     return sig.offset("thin_film_thickness")
 
 
@@ -186,6 +195,9 @@ class ThinFilm:
             k = todo.pop()
             op = code[k, pg.OP]
             if op in stop:
+                if op not in (pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR) and (
+                        code[k, pg.FLAGS] & 3) != 2:
+                    continue  # a plain reflect or transmit lobe has no Fresnel to change
                 at = code[k, pg.BASE] + _film_offset(op)
                 P[:, at] = np.broadcast_to(d, (rows, 1))[:, 0]
                 P[:, at + 1:at + 4] = np.broadcast_to(n, (rows, 3))

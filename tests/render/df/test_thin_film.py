@@ -144,3 +144,49 @@ def test_bad_arguments():
         df.thin_film(300.0, 0.0, coat())
     with pytest.raises(ValueError, match="must be a bound bsdf"):
         df.thin_film(300.0, 1.3, "coat")
+
+
+# --- films on the lobes' own Fresnel split (scatter_reflect_transmit) ----------------------
+RT = "scatter_reflect_transmit"
+LOBES = [
+    # a soap bubble: a water film in air (the material's IOR 1: air on both sides)
+    CombinerCase("soap-bubble", lambda: df.thin_film(420.0, 1.33, S(mode=RT, ior_inside=1.0,
+                                                                     thin_walled=True)),
+                 "delta", transmits=True, thin=True, lossless=True, reciprocal=False),
+    CombinerCase("glass-film", lambda: df.thin_film(300.0, 1.38, S(mode=RT, ior_inside=1.5)),
+                 "delta", transmits=True, ior=(1.0, 1.5), lossless=True, reciprocal=False),
+    CombinerCase("rough-glass-film", lambda: df.thin_film(300.0, 1.38, G(
+        roughness_u=0.3, mode=RT, ior_inside=1.5)), "glossy", transmits=True, ior=(1.0, 1.5),
+        albedo_tol=2e-2, reciprocal=False, chi2_wos=((45.0, 30.0),)),
+]
+
+
+@pytest.mark.parametrize("case", LOBES, ids=case_ids(LOBES))
+def test_lobe_consistency_and_no_nan(case, rng):
+    check_consistency(case, rng)
+    check_no_nan_combined(case, rng)
+
+
+@pytest.mark.parametrize(("case", "wo"), two_wos(LOBES), ids=pair_ids(two_wos(LOBES)))
+def test_lobe_furnace(case, wo):
+    check_integrals_combined(case, wo)
+
+
+def test_lobe_chi2():
+    check_chi2_combined(LOBES[2], (45.0, 30.0), test_count=1)
+
+
+def test_film_colours_the_split_and_spares_plain_modes(rng):
+    w = direction(0.0)[None]
+    s = df.thin_film(420.0, 1.33, S(mode=RT, ior_inside=1.0, thin_walled=True)).sample(
+        np.repeat(w, 4000, axis=0), rng.random(4000), rng.random((4000, 2)))
+    refl = s.wi[:, 2] > 0
+    # the reflected colour is the film's reflectance over its mean: not grey; reflection
+    # and transmission together lose nothing (F + (1 - F) = 1 per channel)
+    rgb = s.weight[refl].mean(axis=0)
+    assert rgb.max() - rgb.min() > 0.1
+    assert np.allclose(s.weight.mean(axis=0), 1.0, atol=0.05)
+    # a reflect-only lobe has no Fresnel: the film leaves it alone
+    g = G(roughness_u=0.3)
+    wo, wi = random_dirs(rng, 500), random_dirs(rng, 500)
+    assert np.array_equal(df.thin_film(420.0, 1.33, g).eval(wo, wi), g.eval(wo, wi))
