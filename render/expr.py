@@ -597,14 +597,16 @@ for _enum_name, _values in (
 _NUMERIC_CONSTANTS = {"PI": math.pi, "TWO_PI": 2.0 * math.pi, "HALF_PI": 0.5 * math.pi}
 #: element types of array constructors ``T[](...)``
 _ARRAY_COMPONENTS = ("bsdf_component", "color_bsdf_component", "edf_component",
-                     "color_edf_component")
+                     "color_edf_component", "vdf_component", "color_vdf_component")
 _ARRAY_ELEMENTS = _ARRAY_COMPONENTS + ("float", "int", "bool", "float2", "float3", "color",
                                        "string")
 #: array parameters that also take another array type (the mixers' edf overloads)
-_ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]",),
-                     "color_bsdf_component[]": ("color_edf_component[]",)}
+_ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]", "vdf_component[]"),
+                     "color_bsdf_component[]": ("color_edf_component[]",
+                                                "color_vdf_component[]")}
 _VECTOR_WIDTH = {"float2": 2, "float3": 3, "color": 3}
-_CONSTRUCTORS = ("float2", "float3", "color", "float", "int", "texture_2d", "material",
+_CONSTRUCTORS = ("float2", "float3", "color", "float", "int", "texture_2d", "bsdf_measurement",
+                 "material",
                  "material_surface", "material_emission", "material_volume", "material_geometry")
 
 _F, _UF = MdlType("float"), MdlType("float", True)
@@ -765,8 +767,23 @@ class _Evaluator:
             function = getattr(df, last)
         else:
             function = FUNCTIONS.get(node.callee.text) or FUNCTIONS[last]
-        params, returns = mdl_signature(function)
-        kwargs = self.bind(node, params)
+        overloads = getattr(function, "overloads", None) if kind == "df" else None
+        if overloads:  # MDL's overloads of one name: the first that takes the arguments
+            first = None
+            for candidate in overloads:
+                params, returns = mdl_signature(candidate)
+                try:
+                    kwargs = self.bind(node, params)
+                except MaterialExprError as e:
+                    first = first or e
+                    continue
+                function = candidate
+                break
+            else:
+                raise first
+        else:
+            params, returns = mdl_signature(function)
+            kwargs = self.bind(node, params)
         try:
             result = function(**kwargs)
         except MaterialExprError:
@@ -932,6 +949,8 @@ class _Evaluator:
                 raise self.error(f"{name}(...): {e}", node.offset) from None
         if name == "texture_2d":
             return self.texture(node)
+        if name == "bsdf_measurement":
+            return self.measurement(node)
         for argument in node.arguments:
             if argument.name is not None:
                 raise self.error(f"{name}(...) takes positional arguments only",
@@ -992,6 +1011,26 @@ class _Evaluator:
         except Exception as e:  # an unreadable file
             raise self.error(f"cannot read texture {file!r}: {e}",
                              node.arguments[0].value.offset) from None
+
+    def measurement(self, node: Call) -> Value:
+        """``bsdf_measurement("file.mbsdf")``: an MBSDF file read relative to ``base_dir``
+        (a scene's directory) or as given."""
+        from render.df._mbsdf import MbsdfError, read_mbsdf
+
+        params = [MdlParam("name", MdlType("string", True), True, "")]
+        kwargs = self.bind(node, params)
+        file = kwargs["name"]
+        path = Path(file)
+        if not path.is_absolute() and self.base_dir is not None:
+            near = Path(self.base_dir) / path
+            path = near if near.exists() else path
+        if not path.exists():
+            raise self.error(f"bsdf_measurement: no file {file!r}", node.arguments[0].value.offset,
+                             "give the MBSDF file's path, relative to the scene file")
+        try:
+            return Value(read_mbsdf(path), MdlType("bsdf_measurement", True))
+        except MbsdfError as e:
+            raise self.error(str(e), node.arguments[0].value.offset) from None
 
 
 def evaluate_expression(text: str, *, base_dir=None, profile_dirs=None, texture_dirs=None) -> Value:

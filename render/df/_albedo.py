@@ -52,6 +52,10 @@ __all__ = [
     "lanes_table",
     "table_albedo",
     "lane_table_albedo",
+    "lane_table_average",
+    "iso_average",
+    "aniso_average",
+    "glossy_albedo_table",
     "ROUGHNESS_NODES",
     "MU_MIN",
 ]
@@ -96,10 +100,15 @@ def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     )
     sig = module.SIGNATURE
     P = np.zeros((1, sig.width))
-    P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
-    P[0, sig.offset("roughness_v")] = max(rv, ROUGHNESS_NODES[0])
+    names = [p.name for p in sig.params]
+    if "roughness_u" in names:
+        P[0, sig.offset("roughness_u")] = max(ru, ROUGHNESS_NODES[0])
+        P[0, sig.offset("roughness_v")] = max(rv, ROUGHNESS_NODES[0])
+    else:  # an isotropic lobe (sheen_bsdf): one roughness
+        P[0, sig.offset("roughness")] = max(ru, ROUGHNESS_NODES[0])
     P[0, sig.offset("tint") : sig.offset("tint") + 3] = 1.0
-    P[0, sig.offset("tangent_u")] = 1.0
+    if "tangent_u" in names:
+        P[0, sig.offset("tangent_u")] = 1.0
     flags = 0
     if mode is not None:
         flags = MODE_FLAGS[ScatterMode.parse(mode).value]
@@ -116,6 +125,37 @@ def iso_column(cls: type, mode, eta: float, ir: int) -> Arr:
     wo = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=1)
     r = float(ROUGHNESS_NODES[ir])
     return _mean_weight(cls, mode, eta, r, r, wo, N_POINTS)
+
+
+def _average_iso(col: Arr) -> float:
+    """``E_avg = 2 ∫ E(mu) mu dmu`` of an isotropic column, exactly for its interpolant
+    (linear in ``y = sqrt(mu)`` between the nodes ``y_j = j / (N_MU - 1)``):
+    ``4 ∫ E(y) y^3 dy``."""
+    y = np.linspace(0.0, 1.0, len(col))
+    a, b = y[:-1], y[1:]
+    h = b - a
+    # ∫_a^b ((b - y) E_a + (y - a) E_b) / h * y^3 dy, each term in closed form
+    i4 = (b**4 - a**4) / 4.0
+    i5 = (b**5 - a**5) / 5.0
+    ea, eb = col[:-1], col[1:]
+    return float(4.0 * np.sum((ea * (b * i4 - i5) + eb * (i5 - a * i4)) / h))
+
+
+@lru_cache(maxsize=None)
+def iso_average(cls: type, mode, eta: float, ir: int) -> float:
+    """The cosine-weighted average ``E_avg`` of :func:`iso_column` (the energy the
+    multiple-scattering lobe of ``multiscatter_tint`` must hand back is ``1 - E_avg``)."""
+    return _average_iso(iso_column(cls, mode, eta, ir))
+
+
+@lru_cache(maxsize=None)
+def aniso_average(cls: type, mode, eta: float, iu: int, iv: int) -> float:
+    """``E_avg`` of :func:`aniso_column`: the azimuthal mean of the trigonometric
+    interpolant (its constant coefficient) averaged over ``mu`` as :func:`iso_average`
+    does, on the anisotropic nodes (linear in ``sqrt(mu)``)."""
+    col = aniso_column(cls, mode, eta, iu, iv)  # (N_PHI, N_MU_A)
+    mean = _COS_INV[:, 0] @ col
+    return _average_iso(mean)
 
 
 @lru_cache(maxsize=None)
@@ -151,9 +191,10 @@ def _iso_node(cls, mode, eta: float, ru: float) -> Arr:
     i, fy = int(i[0]), float(fy[0])
     if fy >= 1.0:
         i, fy = i + 1, 0.0
-    col = iso_column(cls, mode, eta, i)
+    col = np.append(iso_column(cls, mode, eta, i), iso_average(cls, mode, eta, i))
     if fy > 0.0:
-        col = (1.0 - fy) * col + fy * iso_column(cls, mode, eta, i + 1)
+        nxt = np.append(iso_column(cls, mode, eta, i + 1), iso_average(cls, mode, eta, i + 1))
+        col = (1.0 - fy) * col + fy * nxt
     return col
 
 
@@ -162,12 +203,14 @@ def _aniso_node(cls, mode, eta: float, ru: float, rv: float) -> Arr:
     iu, fu = (float(a[0]) for a in _locate(np.sqrt(np.array([ru])), _Y))
     iv, fv = (float(a[0]) for a in _locate(np.sqrt(np.array([rv])), _Y))
     acc = np.zeros((N_PHI, N_MU_A))
+    avg = 0.0
     for du in (0, 1):
         for dv in (0, 1):
             w = (fu if du else 1 - fu) * (fv if dv else 1 - fv)
             if w > 0.0:
                 acc += w * aniso_column(cls, mode, eta, int(iu) + du, int(iv) + dv)
-    return acc.ravel()
+                avg += w * aniso_average(cls, mode, eta, int(iu) + du, int(iv) + dv)
+    return np.append(acc.ravel(), avg)
 
 
 def node_table(cls: type, mode, roughness_u: float, roughness_v: float,
@@ -189,9 +232,11 @@ def node_table(cls: type, mode, roughness_u: float, roughness_v: float,
     Returns
     -------
     (k,) float64
-        ``[kind, inside_offset, E outside..., (E inside...)]``: ``kind`` 0 isotropic (``E``
-        at the ``N_MU`` cosine nodes) or 1 anisotropic (``N_PHI x N_MU_A`` nodes);
-        ``inside_offset`` is where the inside table starts (0: the same table).
+        ``[kind, inside_offset, E outside..., E_avg, (E inside..., E_avg)]``: ``kind`` 0
+        isotropic (``E`` at the ``N_MU`` cosine nodes) or 1 anisotropic (``N_PHI x N_MU_A``
+        nodes), each side followed by its cosine-weighted average ``E_avg``
+        (:func:`lane_table_average`); ``inside_offset`` is where the inside table starts
+        (0: the same table).
     """
     from render.df._common import ScatterMode
 
@@ -258,7 +303,8 @@ def table_albedo(T, t, mu, phi, inside):
 def _grid(cls, mode, eta: float, ru: np.ndarray, rv: np.ndarray) -> np.ndarray:
     """The roughness-grid part of a :func:`lanes_table` for lanes ``(ru, rv)`` (clipped):
     ``[iso map (_NR), aniso map (_NR^2), columns...]``; a map entry is the offset of
-    column ``i`` (``(iu, iv)``) from the grid's start, or -1 where no lane needs it."""
+    column ``i`` (``(iu, iv)``) from the grid's start, or -1 where no lane needs it; each
+    column ends with its ``E_avg``."""
     maps = np.full(_NR + _NR * _NR, -1.0)
     cols, at = [], len(maps)
     iso = ru == rv
@@ -267,8 +313,8 @@ def _grid(cls, mode, eta: float, ru: np.ndarray, rv: np.ndarray) -> np.ndarray:
     i, f = np.where(shift, i + 1, i), np.where(shift, 0.0, f)
     for k in sorted(set(i.tolist()) | set((i[f > 0.0] + 1).tolist())):
         maps[k] = at
-        cols.append(iso_column(cls, mode, eta, k))
-        at += N_MU
+        cols.append(np.append(iso_column(cls, mode, eta, k), iso_average(cls, mode, eta, k)))
+        at += N_MU + 1
     iu, fu = _locate(np.sqrt(ru[~iso]), _Y)
     iv, fv = _locate(np.sqrt(rv[~iso]), _Y)
     corners = set()
@@ -279,8 +325,9 @@ def _grid(cls, mode, eta: float, ru: np.ndarray, rv: np.ndarray) -> np.ndarray:
                                strict=True))
     for a, b in sorted(corners):
         maps[_NR + a * _NR + b] = at
-        cols.append(aniso_column(cls, mode, eta, a, b).ravel())
-        at += N_PHI * N_MU_A
+        cols.append(np.append(aniso_column(cls, mode, eta, a, b).ravel(),
+                              aniso_average(cls, mode, eta, a, b)))
+        at += N_PHI * N_MU_A + 1
     return np.concatenate([maps, *cols])
 
 
@@ -386,3 +433,86 @@ def lane_table_albedo(T, t, mu, phi, inside, ru, rv, ior_outside, ior_inside):
                     v1 += wc * T[at + 1]
         E += w * ((1.0 - fx) * v0 + fx * v1)
     return E
+
+
+@njit
+def lane_table_average(T, t, inside, ru, rv, ior_outside, ior_inside):
+    """The cosine-weighted average ``E_avg = (1/pi) ∫ E(w) |cos| dw`` of one lane's white
+    albedo, from its node's table at ``T[t:]`` (the value stored after each column and
+    interpolated in roughness as the columns are; :func:`lane_table_albedo`'s lookups)."""
+    if T[t] != _LANES:
+        base = t + _HEADER
+        if inside and T[t + 1] > 0.0:
+            base = t + int(T[t + 1])
+        return T[base + (N_MU if T[t] == _ISO else N_PHI * N_MU_A)]
+    e = t + 2
+    if T[t + 1] > 1.0:
+        for g in range(int(T[t + 1])):
+            if T[t + 2 + 4 * g] == ior_outside and T[t + 3 + 4 * g] == ior_inside:
+                e = t + 2 + 4 * g
+                break
+    gb = t + int(T[e + 3] if inside else T[e + 2])
+    ru = min(max(ru, _R_LO), 1.0)
+    rv = min(max(rv, _R_LO), 1.0)
+    if ru == rv:
+        i, f = _locate1(math.sqrt(ru), _Y)
+        if f >= 1.0:
+            i, f = i + 1, 0.0
+        v = T[gb + int(T[gb + i]) + N_MU]
+        if f > 0.0:
+            v = (1.0 - f) * v + f * T[gb + int(T[gb + i + 1]) + N_MU]
+        return v
+    iu, fu = _locate1(math.sqrt(ru), _Y)
+    iv, fv = _locate1(math.sqrt(rv), _Y)
+    v = 0.0
+    for du in range(2):
+        for dv in range(2):
+            wc = (fu if du else 1.0 - fu) * (fv if dv else 1.0 - fv)
+            if wc > 0.0:
+                v += wc * T[gb + int(T[gb + _NR + (iu + du) * _NR + iv + dv]) + N_PHI * N_MU_A]
+    return v
+
+
+def glossy_albedo_table(cls: type, row, flags: int) -> np.ndarray:
+    """The node table of a glossy lobe with MDL's glossy signature (``roughness_u``,
+    ``roughness_v``, ``mode`` and the IOR context: ``simple_glossy_bsdf`` and the
+    ``microfacet_*`` dfs): a :func:`node_table` for one packed row (constant arguments),
+    a :func:`lanes_table` for rows whose roughness or IOR differ (per-lane arguments).
+
+    Parameters
+    ----------
+    cls : type
+        The df class (its module's ``SIGNATURE`` and ``sample_weights``).
+    row : (SIGNATURE.width,) or (rows, SIGNATURE.width) float64
+        The node's packed slots.
+    flags : int
+        Its mode and thin-walled flags.
+    """
+    from render.df import _kernel_common as kc
+    from render.df._common import ScatterMode
+    from render.df._signature import MODE_FLAGS, MODE_MASK, REFLECT, THIN_WALLED
+
+    sig = sys.modules[cls.__module__].SIGNATURE
+    _ru, _rv = sig.offset("roughness_u"), sig.offset("roughness_v")
+    _o, _i = sig.offset("ior_outside"), sig.offset("ior_inside")
+    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
+    mode = flags & MODE_MASK
+    thin = (flags & THIN_WALLED) != 0
+    key = (ScatterMode.scatter_reflect if mode == REFLECT or thin
+           else ScatterMode({v: k for k, v in MODE_FLAGS.items()}[mode]))
+    cols = [_ru, _rv] if key is ScatterMode.scatter_reflect else [_ru, _rv, _o, _i]
+    ru = np.maximum(rows[:, _ru], kc.ROUGHNESS_MIN)
+    rv = np.maximum(rows[:, _rv], kc.ROUGHNESS_MIN)
+    if np.all(rows[:, cols] == rows[0, cols]):
+        if key is ScatterMode.scatter_reflect:
+            return node_table(cls, key, ru[0], rv[0])
+        o, i = kc.ior_pair(rows[0, _o], rows[0, _i], False, False, True)
+        return node_table(cls, key, ru[0], rv[0], i / o, o / i)
+    if key is ScatterMode.scatter_reflect:
+        return lanes_table(cls, key, ru, rv)
+    iors = rows[:, [_o, _i]]
+    etas = np.empty_like(iors)
+    for k, (ro, ri) in enumerate(iors):
+        o, i = kc.ior_pair(ro, ri, False, False, True)
+        etas[k] = i / o, o / i
+    return lanes_table(cls, key, ru, rv, iors, etas)

@@ -93,6 +93,9 @@ from render.df._signature import THIN_WALLED
 from render.jit import njit
 
 __all__ = [
+    "measured_curve1",
+    "scale_cosine",
+    "scale_half_vector",
     "fresnel_curve",
     "fresnel_eta",
     "f82_curve1",
@@ -199,3 +202,43 @@ def curve_estimates(w0, w1, w2, c0, c1, c2, co0, co1, co2):
     ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``, from ``c = C(nk1)``."""
     return (w0 * c0, w1 * c1, w2 * c2, max(1.0 - w0 * max(c0, co0), 0.0),
             max(1.0 - w1 * max(c1, co1), 0.0), max(1.0 - w2 * max(c2, co2), 0.0))
+
+
+@njit
+def measured_curve1(P, row, at, n, c, ch):
+    """A measured curve of ``n`` colours at ``P[row, at:at + 3 n]`` (equally spaced in
+    angle over [0, pi/2], linear in between), channel ``ch`` at cosine ``c``, saturated:
+    ``reference/mdl-distribution-functions.md`` §3.2 (0 for an empty curve)."""
+    if n <= 0:
+        return 0.0
+    if n == 1:
+        return min(max(P[row, at + ch], 0.0), 1.0)
+    c = min(max(c, 0.0), 1.0)
+    x = math.acos(c) * (2.0 / math.pi) * (n - 1)
+    j = min(int(math.floor(x)), n - 2)
+    f = min(max(x - j, 0.0), 1.0)
+    v = (1.0 - f) * P[row, at + 3 * j + ch] + f * P[row, at + 3 * (j + 1) + ch]
+    return min(max(v, 0.0), 1.0)
+
+
+@njit
+def scale_half_vector(wox, woy, woz, wix, wiy, wiz):
+    """``(wo.h, n.h)`` of a directional modifier: ``h`` the reflection half vector with
+    both directions mirrored to ``wo``'s side and a transmitted ``wi`` mirrored through
+    the tangent plane (``wo.h = -1`` where it is negative: the factor is 0 there)."""
+    s = -1.0 if woz < 0.0 else 1.0
+    oz = woz * s
+    iz = wiz * s
+    hx, hy, hz, ok = kc.unitize(wox + wix, woy + wiy, oz + kc.mirror_z(iz, iz < 0.0))
+    if not ok:
+        hx, hy, hz = 0.0, 0.0, 1.0
+    kh = kc.dot3(wox, woy, oz, hx, hy, hz)
+    if not kh >= 0.0:
+        return -1.0, hz
+    return min(kh, 1.0), min(abs(hz), 1.0)
+
+
+@njit
+def scale_cosine(wox, woy, woz, wix, wiy, wiz):
+    """``wo.h`` of :func:`scale_half_vector` (-1 where negative)."""
+    return scale_half_vector(wox, woy, woz, wix, wiy, wiz)[0]

@@ -41,6 +41,12 @@ __all__ = [
     "COLOR_BSDF_COMPONENT_SIGNATURE",
     "EDF_COMPONENT_SIGNATURE",
     "COLOR_EDF_COMPONENT_SIGNATURE",
+    "VDF_COMPONENT_SIGNATURE",
+    "COLOR_VDF_COMPONENT_SIGNATURE",
+    "VdfComponent",
+    "vdf_component",
+    "ColorVdfComponent",
+    "color_vdf_component",
     "component_signature",
     "mix_signatures",
     "COMPONENT_WIDTH",
@@ -75,6 +81,12 @@ EDF_COMPONENT_SIGNATURE = Signature("edf_component", (
 #: MDL's ``struct color_edf_component { color weight = color(0.0); edf component; }``
 COLOR_EDF_COMPONENT_SIGNATURE = Signature("color_edf_component", (
     Param("weight", "color", (0.0, 0.0, 0.0)), Param("component", "edf", None)))
+#: MDL's ``struct vdf_component { float weight = 0.0; vdf component = vdf(); }``
+VDF_COMPONENT_SIGNATURE = Signature("vdf_component", (
+    Param("weight", "float", 0.0, packed="color"), Param("component", "vdf", None)))
+#: MDL's ``struct color_vdf_component { color weight = color(0.0); vdf component; }`` (1.7)
+COLOR_VDF_COMPONENT_SIGNATURE = Signature("color_vdf_component", (
+    Param("weight", "color", (0.0, 0.0, 0.0)), Param("component", "vdf", None)))
 #: slots of one packed component (its weight as a colour)
 COMPONENT_WIDTH = 3
 
@@ -112,6 +124,7 @@ class BsdfComponent:
 
     _kind: type = Bsdf
     _color = False
+    _vdf = False
 
     def __init__(self, weight: ArrayLike = 0.0, component=None):
         name = type(self).__name__
@@ -121,6 +134,10 @@ class BsdfComponent:
             w = lane_float(weight, f"{name}.weight")
             self.weight = w[:, None] * np.ones(3) if w.ndim else np.full((1, 3), float(w))
         self.component = check_child(component, f"{name}.component", self._kind)
+        if self._vdf and self.component is not None and getattr(
+                getattr(self.component, "program", None), "kind", "vdf") != "vdf":
+            raise ValueError(f"{name}.component must be a vdf (e.g. df.anisotropic_vdf), got "
+                             f"{type(self.component).__name__}")
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(weight={self.weight.tolist()}, component={self.component!r})"
@@ -145,8 +162,24 @@ class ColorEdfComponent(BsdfComponent):
     _color = True
 
 
+class VdfComponent(BsdfComponent):
+    """MDL's ``vdf_component { float weight = 0.0; vdf component = vdf(); }`` (a vdf is a
+    :class:`~render.program.ProgramBsdf` whose program's kind is ``"vdf"``)."""
+
+    _vdf = True
+
+
+class ColorVdfComponent(BsdfComponent):
+    """MDL's ``color_vdf_component { color weight = color(0.0); vdf component; }`` (1.7)."""
+
+    _vdf = True
+    _color = True
+
+
 bsdf_component = BsdfComponent
 color_bsdf_component = ColorBsdfComponent
+vdf_component = VdfComponent
+color_vdf_component = ColorVdfComponent
 edf_component = EdfComponent
 color_edf_component = ColorEdfComponent
 
@@ -180,9 +213,12 @@ def as_components(components, color: bool, mix: str) -> list[BsdfComponent]:
                 )
             out.append(c)
         elif isinstance(c, tuple) and len(c) == 2:
-            kind = EdfComponent if isinstance(c[1], Edf) else BsdfComponent
+            vdf = getattr(getattr(c[1], "program", None), "kind", None) == "vdf"
+            kind = EdfComponent if isinstance(c[1], Edf) else (VdfComponent if vdf
+                                                                else BsdfComponent)
             if color:
-                kind = ColorEdfComponent if kind is EdfComponent else ColorBsdfComponent
+                kind = {EdfComponent: ColorEdfComponent, VdfComponent: ColorVdfComponent,
+                        BsdfComponent: ColorBsdfComponent}[kind]
             out.append(kind(*c))
         else:
             raise ValueError(
@@ -192,4 +228,8 @@ def as_components(components, color: bool, mix: str) -> list[BsdfComponent]:
     edf = [c._kind is Edf for c in out]
     if any(edf) and not all(edf):
         raise ValueError(f"{mix}: components mix bsdf and edf components; use one kind")
+    vdf = [c._vdf or getattr(getattr(c.component, "program", None), "kind", None) == "vdf"
+           for c in out]
+    if any(vdf) and not all(vdf):
+        raise ValueError(f"{mix}: components mix vdf and bsdf components; use one kind")
     return out

@@ -11,7 +11,10 @@ Each df module declares ``SIGNATURE = Signature(kind, params, context)``.  From 
   1 slot each); uniform enum arguments (``mode``) go to the node's
   integer ``flags`` instead (:data:`MODE_FLAGS`, :data:`THIN_WALLED`), and ``handle``
   is not packed;
-* the kernels read parameter ``name`` at ``P[row, b + SIGNATURE.offset(name)]``.
+* the kernels read parameter ``name`` at ``P[row, b + SIGNATURE.offset(name)]``;
+* an array parameter (``color[<N>] curve_values``, :data:`ARRAYS`) packs its length
+  ``N`` at its offset and its elements after the fixed slots, from
+  ``b + SIGNATURE.width`` (uniform: one row for all lanes).
 
 Examples
 --------
@@ -37,6 +40,7 @@ __all__ = [
     "REFLECT",
     "TRANSMIT",
     "REFLECT_TRANSMIT",
+    "ARRAYS",
 ]
 
 
@@ -51,6 +55,9 @@ REQUIRED = _Required()
 #: slots per MDL type (types not listed are not packed: strings, enums, dfs)
 WIDTH = {"float": 1, "float2": 2, "float3": 3, "color": 3, "bool": 1, "int": 1,
          "float3x3": 9}
+#: array types packed as a count slot in place and their elements after the node's
+#: fixed slots (``b + signature.width``); element widths
+ARRAYS = {"color[]": 3, "float[]": 1}
 
 #: ``flags & MODE_MASK``: ``df::scatter_mode``
 REFLECT, TRANSMIT, REFLECT_TRANSMIT = 0, 1, 2
@@ -99,7 +106,10 @@ class Param:
 
     @property
     def width(self) -> int:
-        """Slots taken when packed (0: not packed)."""
+        """Slots taken when packed (0: not packed); an array takes one (its length), its
+        elements follow the node's fixed slots."""
+        if self.type in ARRAYS:
+            return 1
         return 0 if self.name == "handle" else WIDTH.get(self.packed or self.type, 0)
 
 

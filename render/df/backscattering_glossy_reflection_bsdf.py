@@ -24,8 +24,8 @@ gives the half vector ``h = normalize(nk1 n + (x + wo_t) t + (y + wo_b) b)``; ``
 
 which is reciprocal and never gains energy (weight <= tint).  Reflection only, no
 Fresnel.  Departures: the exponent uses the exact ``log1p`` form (as in
-``simple_glossy_bsdf``); ``multiscatter_tint`` is not implemented yet; ``albedo()`` is
-tabulated (``_albedo``).
+``simple_glossy_bsdf``); ``albedo()`` is tabulated (``_albedo``); ``multiscatter_tint``
+adds the energy-compensation lobe of :mod:`render.df._microfacet` from that table.
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
 and :func:`albedo` (with the table arguments ``T, t`` of :func:`albedo_table`, as in
@@ -43,7 +43,8 @@ from render.bsdf import (
     Lobe,
 )
 from render.df import _kernel_common as kc
-from render.df._albedo import lane_table_albedo, lanes_table, node_table
+from render.df._albedo import lanes_table, node_table
+from render.df._microfacet import ms_albedo, ms_choice, ms_eval, ms_on
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
 from render.jit import njit
@@ -64,7 +65,6 @@ SIGNATURE = Signature("bsdf", (
     Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
     Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
-    # not implemented (as the earlier numpy class did): the packer refuses non-zero values
     Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
     Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
     Param("handle", "string", "", uniform=True),
@@ -72,6 +72,7 @@ SIGNATURE = Signature("bsdf", (
 _RU = SIGNATURE.offset("roughness_u")
 _RV = SIGNATURE.offset("roughness_v")
 _TINT = SIGNATURE.offset("tint")
+_MS = SIGNATURE.offset("multiscatter_tint")
 _TANGENT = SIGNATURE.offset("tangent_u")
 _PI = math.pi
 _GLOSSY_R = int(Lobe.GLOSSY_REFLECTION)
@@ -105,14 +106,17 @@ def _k_p_half(kx, ky, kz, hx, hy, hz, e_u, e_v, tx, ty):
 
 @njit
 def _setup(P, row, b):
-    """``_setup`` for one lane -> ``(ok, e_u, e_v, tx, ty)``."""
+    """``_setup`` for one lane -> ``(ok, e_u, e_v, tx, ty, glossy, ms)``."""
     ru = max(P[row, b + _RU], kc.ROUGHNESS_MIN)
     rv = max(P[row, b + _RV], kc.ROUGHNESS_MIN)
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
-    if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
+    glossy = not (P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0
+                  and P[row, b + _TINT + 2] == 0.0)
+    ms = ms_on(0, P[row, b + _MS], P[row, b + _MS + 1], P[row, b + _MS + 2])
+    if not (glossy or ms):
         ok = False
-    return ok, 2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty
+    return ok, 2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty, glossy, ms
 
 
 @njit
@@ -143,46 +147,86 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty):
 
 
 @njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
-    if woz < 0.0:  # orient: mirror both through the tangent plane
-        woz = -woz
-        wiz = -wiz
-    ok, e_u, e_v, tx, ty = _setup(P, row, b)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0
-    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
-    return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+def _ms(P, row, b, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf, T, t):
+    """the compensation lobe added to an oriented evaluation (:func:`ms_eval`)."""
+    return ms_eval(T, t, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                   max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0, tx, ty, P[row, b + _MS],
+                   P[row, b + _MS + 1], P[row, b + _MS + 2], glossy, wox, woy, woz,
+                   wix, wiy, wiz, f0, f1, f2, pdf)
 
 
 @njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u2x = kc.clamp_u(u2x)
-    u2y = kc.clamp_u(u2y)
-    flip = woz < 0.0
-    if flip:
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
+    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)`` (``T``,
+    ``t``: the node's albedo table, read by the compensation lobe)."""
+    if woz < 0.0:  # orient: mirror both through the tangent plane
         woz = -woz
-    ok, e_u, e_v, tx, ty = _setup(P, row, b)
+        wiz = -wiz
+    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
     if not ok:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    # a point of the anisotropic disk: phi as Ashikhmin–Shirley, r^2 = 1 - (1-u)^(1/(e+1))
+        return 0.0, 0.0, 0.0, 0.0
+    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
+    if not ms:
+        return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+    if not woz > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0, 0.0
+    return _ms(P, row, b, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
+               w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
+
+
+@njit
+def _single_sample(wox, woy, woz, u2x, u2y, e_u, e_v, tx, ty):
+    """A single-scattering sample -> ``(ok, wix, wiy, wiz)``: a point of the anisotropic
+    disk (phi as Ashikhmin–Shirley, r^2 = 1 - (1-u)^(1/(e+1))) placed at wo's tip gives
+    the half vector; wi mirrors wo about it."""
     cp, sp = as_azimuth(e_u, e_v, u2x)
     e = e_u * cp * cp + e_v * sp * sp
     r = math.sqrt(max(-math.expm1(math.log1p(-u2y) / (e + 1.0)), 0.0))
-    # half vector through the disk point placed at wo's tip; wi mirrors wo about it
     at = r * cp + (wox * tx + woy * ty)
     ab = r * sp + (wox * ty - woy * tx)
     hx, hy, hz, hv = kc.unitize(at * tx + ab * ty, at * ty - ab * tx, woz)
     if not (hv and woz > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        return False, 0.0, 0.0, 0.0
     two_c = 2.0 * kc.dot3(wox, woy, woz, hx, hy, hz)
     wix = two_c * hx - wox
     wiy = two_c * hy - woy
     wiz = two_c * hz - woz
     if not wiz > 0.0:
+        return False, 0.0, 0.0, 0.0
+    return True, wix, wiy, wiz
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
+    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
+    u1 = kc.clamp_u(u1)
+    u2x = kc.clamp_u(u2x)
+    u2y = kc.clamp_u(u2y)
+    flip = woz < 0.0
+    if flip:
+        woz = -woz
+    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
+    if not (ok and woz > kc.COS_ZERO):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    single = True
+    if ms:
+        single, u1 = ms_choice(T, t, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                               max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0, tx, ty,
+                               glossy, wox, woy, woz, u1)
+    if single:
+        ok, wix, wiy, wiz = _single_sample(wox, woy, woz, u2x, u2y, e_u, e_v, tx, ty)
+        if not ok:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    else:
+        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
     w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
+    if ms:
+        if single and not pdf > 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        f0, f1, f2, pdf = _ms(P, row, b, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
+                              w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
+        if pdf > 0.0:
+            w0, w1, w2 = f0 / pdf, f1 / pdf, f2 / pdf
     if not pdf > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     if flip:
@@ -192,29 +236,43 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
 
 @njit(allocates=True)
 def sample_weights(P, flags, wo, pts):
-    """First-channel sample weights (m, k) of :func:`sample` on row 0 of ``P`` for each
+    """First-channel single-scattering sample weights (m, k) on row 0 of ``P`` for each
     ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
     (:mod:`render.df._albedo`)."""
     m, k = wo.shape[0], pts.shape[0]
-    out = np.empty((m, k))
+    out = np.zeros((m, k))
+    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, 0, 0)
+    if not ok:
+        return out
     for i in range(m):
+        woz = abs(wo[i, 2])
         for j in range(k):
-            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
-                               pts[j, 1], pts[j, 2])[4]
+            good, wix, wiy, wiz = _single_sample(wo[i, 0], wo[i, 1], woz, kc.clamp_u(pts[j, 1]),
+                                                 kc.clamp_u(pts[j, 2]), e_u, e_v, tx, ty)
+            if good:
+                w0, w1, w2, pdf = _value(P, 0, 0, wo[i, 0], wo[i, 1], woz, wix, wiy, wiz,
+                                         e_u, e_v, tx, ty)
+                if pdf > 0.0:
+                    out[i, j] = w0
     return out
+
 
 @njit
 def albedo(P, row, b, flags, wox, woy, woz, T, t):
     """Directional albedo ``tint E(wo)`` -> ``(a0, a1, a2)``, ``E`` read from this node's
     table at ``T[t:]`` (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
-    ok, e_u, e_v, tx, ty = _setup(P, row, b)
+    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
     mu = abs(woz)
     if not (ok and mu > kc.COS_ZERO):
         return 0.0, 0.0, 0.0
-    phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
-    E = lane_table_albedo(T, t, mu, phi, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
-                          max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0)
-    return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
+    E = ms_albedo(T, t, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                  max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0, tx, ty, wox, woy, woz)
+    a0, a1, a2 = P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
+    if ms:
+        a0 += P[row, b + _MS] * (1.0 - E)
+        a1 += P[row, b + _MS + 1] * (1.0 - E)
+        a2 += P[row, b + _MS + 2] * (1.0 - E)
+    return a0, a1, a2
 
 
 def albedo_table(row, flags: int = 0) -> np.ndarray:
@@ -233,5 +291,5 @@ def albedo_table(row, flags: int = 0) -> np.ndarray:
 BackscatteringGlossyReflectionBsdf = df_class(
     "BackscatteringGlossyReflectionBsdf", "backscattering_glossy_reflection_bsdf",
     O_BACKSCATTERING_GLOSSY, SIGNATURE, Lobe.GLOSSY_REFLECTION,
-    unsupported=("multiscatter_tint",), albedo_table=albedo_table, module=__name__)
+    albedo_table=albedo_table, module=__name__)
 backscattering_glossy_reflection_bsdf = BackscatteringGlossyReflectionBsdf

@@ -1,6 +1,6 @@
 """MDL ``df::clamped_mix`` and ``df::color_clamped_mix``: components summed in order until 1.
 
-MDL signatures (bsdf, edf and vdf overloads; vdf is not implemented)::
+MDL signatures (bsdf, edf and vdf overloads)::
 
     bsdf clamped_mix(bsdf_component[<N>] components);
     edf  clamped_mix(edf_component[<N>] components);
@@ -43,6 +43,8 @@ __all__ = [
     "ColorClampedMix",
     "ClampedMixEdf",
     "ColorClampedMixEdf",
+    "ClampedMixVdf",
+    "ColorClampedMixVdf",
     "SIGNATURE",
     "COLOR_SIGNATURE",
     "EDF_SIGNATURE",
@@ -91,13 +93,19 @@ ClampedMixEdf = mix_class("ClampedMixEdf", "clamped_mix", O_CLAMPED_MIX_EDF, Fal
 ColorClampedMixEdf = mix_class("ColorClampedMixEdf", "color_clamped_mix", O_CLAMPED_MIX_EDF,
                                True, True, module=__name__)
 
+ClampedMixVdf = mix_class("ClampedMixVdf", "clamped_mix", O_CLAMPED_MIX, False, False,
+                      module=__name__, vdf=True)
+ColorClampedMixVdf = mix_class("ColorClampedMixVdf", "color_clamped_mix", O_CLAMPED_MIX,
+                           True, False, module=__name__, vdf=True)
+
 
 def clamped_mix(components):
     """``df::clamped_mix``: a Bsdf (or Edf) whose saturated weights are cut where their
     running sum reaches 1."""
-    return mix_dispatch(components, ClampedMix, ClampedMixEdf)
+    return mix_dispatch(components, ClampedMix, ClampedMixEdf, ClampedMixVdf)
 
 
 def color_clamped_mix(components):
     """``df::color_clamped_mix``: per-channel weights, clamped per channel."""
-    return mix_dispatch(components, ColorClampedMix, ColorClampedMixEdf)
+    return mix_dispatch(components, ColorClampedMix, ColorClampedMixEdf,
+                        ColorClampedMixVdf)

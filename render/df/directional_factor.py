@@ -11,29 +11,41 @@ custom curve of ``custom_curve_layer`` with Hoffman's F82 tint,
 ``C(c) = saturate(R0 + (R90 - R0)(1 - c)^p - a c (1 - c)^6)`` with ``R0 =
 saturate(normal_tint)``, ``R90 = saturate(grazing_tint)``, ``p = max(exponent, 0)``,
 evaluated at ``c = wo.h`` for the reflection half vector ``h`` (a transmitted ``wi`` is
-mirrored through the tangent plane first)::
+mirrored through the tangent plane first; :func:`render.df._layer.scale_cosine`)::
 
     eval = C(wo.h) base.eval(wo, wi),    pdf = base.pdf (0 where the product is)
 
 The sample weight is scaled by ``C`` at the sampled direction.  Energy: never more
 than the base (``C <= 1``).  ``albedo`` is exact for a constant curve and otherwise
 integrated through the base's sampler (:data:`render.df._combine.ALBEDO_POINTS` QMC
-points).  The EDF overload (MDL 1.7) is not implemented.
+points).
+
+The EDF overload (MDL 1.7, no ``f82_factor``)::
+
+    edf directional_factor(color normal_tint = color(1.0), color grazing_tint = color(1.0),
+                           float exponent = 5.0, edf base = edf());
+
+scales the emission toward ``wo`` by the curve at ``c = wo.n``
+(:class:`DirectionalFactorEdf`); :func:`directional_factor` picks the overload from
+the ``base``.
 """
 
 from __future__ import annotations
 
-from render.df import _kernel_common as kc
-from render.df._layer import f82_curve1
+from render.df._layer import f82_curve1, scale_cosine
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_DIRECTIONAL_FACTOR, df_class
+from render.program import O_DIRECTIONAL_FACTOR, O_DIRECTIONAL_FACTOR_EDF, df_class
 
 __all__ = [
     "DirectionalFactor",
+    "DirectionalFactorEdf",
     "directional_factor",
+    "directional_factor_edf",
     "SIGNATURE",
+    "EDF_SIGNATURE",
     "scale",
+    "edf_scale",
     "curve_constant",
 ]
 
@@ -50,6 +62,16 @@ SIGNATURE = Signature("bsdf", (
     Param("exponent", "float", 5.0, clamp=(0.0, None)),
     Param("base", "bsdf", None),
 ))
+#: the edf overload (MDL 1.7)
+EDF_SIGNATURE = Signature("edf", (
+    Param("normal_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("grazing_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
+    Param("exponent", "float", 5.0, clamp=(0.0, None)),
+    Param("base", "edf", None),
+))
+_E_R0 = EDF_SIGNATURE.offset("normal_tint")
+_E_R90 = EDF_SIGNATURE.offset("grazing_tint")
+_E_EXPONENT = EDF_SIGNATURE.offset("exponent")
 _R0 = SIGNATURE.offset("normal_tint")
 _R90 = SIGNATURE.offset("grazing_tint")
 _F82 = SIGNATURE.offset("f82_factor")
@@ -61,19 +83,23 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     """the directional factor: ``C(wo.h)`` per channel, ``h`` the reflection half
     vector (both directions mirrored to ``wo``'s side, then a transmitted ``wi`` through
     the tangent plane); 0 where ``wo.h < 0``."""
-    s = -1.0 if woz < 0.0 else 1.0
-    oz = woz * s
-    iz = wiz * s
-    hx, hy, hz, ok = kc.unitize(wox + wix, woy + wiy, oz + kc.mirror_z(iz, iz < 0.0))
-    if not ok:
-        hx, hy, hz = 0.0, 0.0, 1.0
-    kh = kc.dot3(wox, woy, oz, hx, hy, hz)
-    if not kh >= 0.0:
+    kh = scale_cosine(wox, woy, woz, wix, wiy, wiz)
+    if kh < 0.0:
         return 0.0, 0.0, 0.0
     p = P[row, b + _EXPONENT]
     return (f82_curve1(kh, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
             f82_curve1(kh, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
             f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
+
+
+@njit
+def edf_scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """the edf overload's factor: the curve (no F82 tint) at ``c = wo.z`` (``wi`` unused)."""
+    p = P[row, b + _E_EXPONENT]
+    c = min(max(woz, 0.0), 1.0)
+    return (f82_curve1(c, P[row, b + _E_R0], P[row, b + _E_R90], 1.0, p),
+            f82_curve1(c, P[row, b + _E_R0 + 1], P[row, b + _E_R90 + 1], 1.0, p),
+            f82_curve1(c, P[row, b + _E_R0 + 2], P[row, b + _E_R90 + 2], 1.0, p))
 
 
 @njit
@@ -95,4 +121,21 @@ def curve_constant(P, row, b, flags):
 
 DirectionalFactor = df_class("DirectionalFactor", "directional_factor", O_DIRECTIONAL_FACTOR,
                              SIGNATURE, module=__name__)
-directional_factor = DirectionalFactor
+DirectionalFactorEdf = df_class("DirectionalFactorEdf", "directional_factor",
+                                O_DIRECTIONAL_FACTOR_EDF, EDF_SIGNATURE, module=__name__)
+directional_factor_edf = DirectionalFactorEdf
+
+
+def directional_factor(*args, **kwargs):
+    """``df::directional_factor``: the edf overload for an edf ``base``
+    (:class:`DirectionalFactorEdf`), else the bsdf one (:class:`DirectionalFactor`)."""
+    from render.program import ProgramEdf
+
+    base = kwargs.get("base", args[-1] if args else None)
+    if isinstance(base, ProgramEdf):
+        return DirectionalFactorEdf(*args, **kwargs)
+    return DirectionalFactor(*args, **kwargs)
+
+
+directional_factor.mdl_name = "directional_factor"
+directional_factor.__signature__ = DirectionalFactor.__signature__

@@ -33,6 +33,9 @@ lowered, only where needed, to ``1 - w Ĉ`` with ``Ĉ`` the coat's Fresnel-weigh
 smooth (specular) coat keeps libbsdf's factors exactly and is lossless where the base
 is, except for the part of the base's lobe that leaves at grazing angles
 (``F(nk2) > F(nk1)``), which is lost.  Measured in ``tests/render/df/test_fresnel_layer.py``.
+
+Under ``thin_film`` the curve is the film's reflectance over the layer's IOR
+(:mod:`render.df.thin_film`; the film slots are not MDL parameters of this df).
 """
 
 from __future__ import annotations
@@ -44,7 +47,8 @@ from render.df._layer import (
     fresnel_curve,
     fresnel_eta,
 )
-from render.df._signature import REQUIRED, Param, Signature
+from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
+from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
 from render.program import O_FRESNEL_LAYER, check_ior, df_class
 
@@ -76,7 +80,7 @@ __all__ = [
 
 def _params(ior: Param, weight: Param) -> tuple:
     return (ior, weight, Param("layer", "bsdf", None), Param("base", "bsdf", None),
-            Param("normal", "float3", "state::normal()"))
+            Param("normal", "float3", "state::normal()"), *FILM_PARAMS)
 
 
 #: ``df::fresnel_layer`` plus the renderer's IORs on the ``+z`` and ``-z`` sides
@@ -93,11 +97,30 @@ _IOR = COLOR_SIGNATURE.offset("ior")
 _WEIGHT = COLOR_SIGNATURE.offset("weight")
 _IOR_OUTSIDE = COLOR_SIGNATURE.offset("ior_outside")
 _IOR_INSIDE = COLOR_SIGNATURE.offset("ior_inside")
+_FILM_D = COLOR_SIGNATURE.offset("thin_film_thickness")
+_FILM_N = COLOR_SIGNATURE.offset("thin_film_ior")
+
+
+@njit
+def _film3(P, row, b, flags, woz, c):
+    """The Fresnel curve under a ``thin_film`` (:func:`render.df.thin_film.film_rgb`): from
+    outside (or on a thin wall) a film over the layer's IOR, from inside a film over the
+    outside medium seen from the layer (its channels' mean)."""
+    ior_o = P[row, b + _IOR_OUTSIDE]
+    i0, i1, i2 = P[row, b + _IOR], P[row, b + _IOR + 1], P[row, b + _IOR + 2]
+    f0, f1, f2 = P[row, b + _FILM_N], P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2]
+    d = P[row, b + _FILM_D]
+    if woz < 0.0 and (flags & THIN_WALLED) == 0:
+        return film_rgb(c, (i0 + i1 + i2) / 3.0, f0, f1, f2, ior_o, ior_o, ior_o, 0.0, 0.0,
+                        0.0, d)
+    return film_rgb(c, ior_o, f0, f1, f2, i0, i1, i2, 0.0, 0.0, 0.0, d)
 
 
 @njit
 def _curve3(P, row, b, flags, woz, c):
     """``F(c)`` per channel, with the IOR context of ``wo``'s side (``woz``)."""
+    if P[row, b + _FILM_D] > 0.0:
+        return _film3(P, row, b, flags, woz, c)
     ior_o = P[row, b + _IOR_OUTSIDE]
     i0, i1, i2 = P[row, b + _IOR], P[row, b + _IOR + 1], P[row, b + _IOR + 2]
     f0 = fresnel_curve(c, fresnel_eta(i0, ior_o, woz, flags))
@@ -173,6 +196,8 @@ def curve_nk(P, row, b, flags, vx, vy, vz):
 def curve_constant(P, row, b, flags):
     """``F`` is constant (0 at every cosine): ``ior == ior_outside`` in every channel."""
     o = P[row, b + _IOR_OUTSIDE]
+    if P[row, b + _FILM_D] > 0.0:
+        return False
     return P[row, b + _IOR] == o and P[row, b + _IOR + 1] == o and P[row, b + _IOR + 2] == o
 
 

@@ -1,6 +1,6 @@
 """MDL ``df::normalized_mix`` and ``df::color_normalized_mix``: components scaled to sum at most 1.
 
-MDL signatures (bsdf, edf and vdf overloads; vdf is not implemented)::
+MDL signatures (bsdf, edf and vdf overloads)::
 
     bsdf normalized_mix(bsdf_component[<N>] components);
     edf  normalized_mix(edf_component[<N>] components);
@@ -44,6 +44,8 @@ __all__ = [
     "ColorNormalizedMix",
     "NormalizedMixEdf",
     "ColorNormalizedMixEdf",
+    "NormalizedMixVdf",
+    "ColorNormalizedMixVdf",
     "bsdf_component",
     "color_bsdf_component",
     "edf_component",
@@ -94,13 +96,19 @@ NormalizedMixEdf = mix_class("NormalizedMixEdf", "normalized_mix", O_NORMALIZED_
 ColorNormalizedMixEdf = mix_class("ColorNormalizedMixEdf", "color_normalized_mix",
                                   O_NORMALIZED_MIX_EDF, True, True, module=__name__)
 
+NormalizedMixVdf = mix_class("NormalizedMixVdf", "normalized_mix", O_NORMALIZED_MIX, False, False,
+                      module=__name__, vdf=True)
+ColorNormalizedMixVdf = mix_class("ColorNormalizedMixVdf", "color_normalized_mix", O_NORMALIZED_MIX,
+                           True, False, module=__name__, vdf=True)
+
 
 def normalized_mix(components):
     """``df::normalized_mix``: a Bsdf (or, over ``edf_component`` values, an Edf) whose
     weights are ``max(weight, 0)`` divided by their sum where it exceeds 1."""
-    return mix_dispatch(components, NormalizedMix, NormalizedMixEdf)
+    return mix_dispatch(components, NormalizedMix, NormalizedMixEdf, NormalizedMixVdf)
 
 
 def color_normalized_mix(components):
     """``df::color_normalized_mix``: per-channel weights, normalised per channel."""
-    return mix_dispatch(components, ColorNormalizedMix, ColorNormalizedMixEdf)
+    return mix_dispatch(components, ColorNormalizedMix, ColorNormalizedMixEdf,
+                        ColorNormalizedMixVdf)

@@ -29,15 +29,14 @@ Departures from libbsdf:
   sets the exponential factor to 1 whenever ``n.h > 0.99999``, which for narrow lobes
   (roughness below ~0.01) makes ``D`` integrate to far more than 1;
 * the refraction pdf includes the ``eta2^2`` Jacobian (see ``_microfacet``);
-* ``multiscatter_tint`` is not implemented yet (``albedo()`` gives the single-scattering
-  table that the compensation would need).
+* ``multiscatter_tint`` adds libbsdf's energy-compensation lobe
+  (:mod:`render.df._microfacet`), from this lobe's own albedo table.
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
-and :func:`albedo` below, one lane at a time, bit for bit the earlier numpy class's results
-(``tests/render/df/test_simple_glossy_bsdf_kernels.py``).  :func:`albedo` takes two
-arguments beyond the kernel contract, the program's table array ``T`` and this node's
-offset ``t`` in it, filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why
-the tables are not frozen into the kernel).
+and :func:`albedo` below, one lane at a time.  All three take two arguments beyond the
+kernel contract, the program's table array ``T`` and this node's offset ``t`` in it,
+filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why the tables are not
+frozen into the kernel): the albedo and the compensation lobe read it.
 
 References: Ashikhmin & Shirley, "An anisotropic Phong BRDF model" (2000); Heitz &
 d'Eon, "Importance sampling microfacet-based BSDFs using the distribution of visible
@@ -52,17 +51,20 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._albedo import lane_table_albedo, lanes_table, node_table
-from render.df._microfacet import mf_finish, mf_geometry, mf_sample_dir
-from render.df._signature import (
-    MODE_FLAGS,
-    MODE_MASK,
-    REFLECT,
-    REQUIRED,
-    THIN_WALLED,
-    Param,
-    Signature,
+from render.df._albedo import glossy_albedo_table
+from render.df._microfacet import (
+    mf_albedo,
+    mf_film_event,
+    mf_film_on,
+    mf_finish,
+    mf_geometry,
+    mf_sample_dir,
+    microfacet_signature,
+    ms_choice,
+    ms_eval,
+    ms_on,
 )
+from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED
 from render.jit import njit
 from render.program import O_SIMPLE_GLOSSY, df_class
 
@@ -77,19 +79,13 @@ __all__ = [
 ]
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
-SIGNATURE = Signature("bsdf", (
-    Param("roughness_u", "float", REQUIRED, clamp=(kc.ROUGHNESS_MIN, None)),
-    Param("roughness_v", "float", "roughness_u", clamp=(kc.ROUGHNESS_MIN, None)),
-    Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
-    # not implemented (as the earlier numpy class did): the packer refuses non-zero values
-    Param("multiscatter_tint", "color", (0.0, 0.0, 0.0), clamp=(0.0, 1.0)),
-    Param("tangent_u", "float3", "state::texture_tangent_u(0)"),
-    Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
-    Param("handle", "string", "", uniform=True),
-), context=("ior_outside", "ior_inside"))
+SIGNATURE = microfacet_signature()
 _RU = SIGNATURE.offset("roughness_u")
 _RV = SIGNATURE.offset("roughness_v")
 _TINT = SIGNATURE.offset("tint")
+_MS = SIGNATURE.offset("multiscatter_tint")
+_FILM_D = SIGNATURE.offset("thin_film_thickness")
+_FILM_N = SIGNATURE.offset("thin_film_ior")
 _TANGENT = SIGNATURE.offset("tangent_u")
 _IOR_OUT = SIGNATURE.offset("ior_outside")
 _IOR_IN = SIGNATURE.offset("ior_inside")
@@ -155,18 +151,21 @@ def as_sample(e_u, e_v, u0, u1):
 
 @njit
 def _setup(P, row, b, flags, flip):
-    """the lane's setup for one lane -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2)``."""
+    """the lane's setup -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms)``."""
     e_u, e_v, norm = as_exponents(P[row, b + _RU], P[row, b + _RV])
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
-    if P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0 and P[row, b + _TINT + 2] == 0.0:
+    glossy = not (P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0
+                  and P[row, b + _TINT + 2] == 0.0)
+    ms = ms_on(flags & _MODE_MASK_, P[row, b + _MS], P[row, b + _MS + 1], P[row, b + _MS + 2])
+    if not (glossy or ms):
         ok = False
     o = P[row, b + _IOR_OUT]
     i = P[row, b + _IOR_IN]
     if not (o > 0.0 and i > 0.0):
-        ok = False  # not an IOR (the packer and the earlier numpy class refuse it)
+        ok = False  # not an IOR (the packer refuses it)
     eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_) != 0, True)
-    return ok, e_u, e_v, norm, tx, ty, eta1, eta2
+    return ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms
 
 
 @njit
@@ -180,27 +179,60 @@ def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, t
     ht = hx * tx + hy * ty
     hb = hx * ty - hy * tx
     D = as_d_cos(e_u, e_v, norm, ht, hb, hz) / hz
-    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, g2,
-                     P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2])
+    t0, t1, t2 = P[row, b + _TINT], P[row, b + _TINT + 1], P[row, b + _TINT + 2]
+    d = P[row, b + _FILM_D]
+    if mf_film_on(flags, d):  # a thin_film replaces Fresnel (render.df.thin_film)
+        p_ev, m0, m1, m2 = mf_film_event(flags, kh1, eta1, eta2, d, P[row, b + _FILM_N],
+                                         P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2],
+                                         wiz < 0.0)
+        if not p_ev > 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        t0, t1, t2 = t0 * m0, t1 * m1, t2 * m2
+    return mf_finish(D, refr, woz, kh1, kh2, eta1, eta2, p_ev, g1_1, g2, t0, t1, t2)
 
 
 @njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
+def _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf, T, t):
+    """the compensation lobe added to an oriented evaluation (:func:`ms_eval`)."""
+    return ms_eval(T, t, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                   max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
+                   P[row, b + _IOR_IN], tx, ty, P[row, b + _MS], P[row, b + _MS + 1],
+                   P[row, b + _MS + 2], glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf)
+
+
+@njit
+def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
+    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``
+    (``T``, ``t``: the node's albedo table, read by the compensation lobe)."""
     flip = woz < 0.0
     if flip:  # orient: mirror both through the tangent plane
         woz = -woz
         wiz = -wiz
-    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
+    ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
     if not ok:
         return 0.0, 0.0, 0.0, 0.0
     w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                              e_u, e_v, norm, tx, ty, eta1, eta2)
-    return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+    if not ms:
+        return w0 * pdf, w1 * pdf, w2 * pdf, pdf
+    if not woz > kc.COS_ZERO:
+        return 0.0, 0.0, 0.0, 0.0
+    return _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
+               w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
 
 
 @njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
+def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, e_u, e_v, tx, ty, eta1, eta2):
+    """half vector from D (n.h), in the anisotropy frame, then into the local frame."""
+    ht, hb, hn = as_sample(e_u, e_v, u2x, u2y)
+    return mf_sample_dir(flags, eta1, eta2, wox, woy, woz,
+                         ht * tx + hb * ty, ht * ty - hb * tx, hn, u1, True,
+                         P[row, b + _FILM_D], P[row, b + _FILM_N], P[row, b + _FILM_N + 1],
+                         P[row, b + _FILM_N + 2])
+
+
+@njit
+def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
     u1 = kc.clamp_u(u1)
     u2x = kc.clamp_u(u2x)
@@ -208,17 +240,32 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     flip = woz < 0.0
     if flip:
         woz = -woz
-    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
+    ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
     if not ok:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    # half vector from D (n.h), in the anisotropy frame, then into the local frame
-    ht, hb, hn = as_sample(e_u, e_v, u2x, u2y)
-    ok, wix, wiy, wiz = mf_sample_dir(flags, eta1, eta2, wox, woy, woz,
-                                      ht * tx + hb * ty, ht * ty - hb * tx, hn, u1)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    single = True
+    if ms:
+        if not woz > kc.COS_ZERO:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        single, u1 = ms_choice(T, t, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
+                               max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
+                               P[row, b + _IOR_IN], tx, ty, glossy, wox, woy, woz, u1)
+    if single:
+        ok, wix, wiy, wiz = _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y,
+                                           e_u, e_v, tx, ty, eta1, eta2)
+        if not ok:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    else:
+        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
     w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                              e_u, e_v, norm, tx, ty, eta1, eta2)
+    if ms:
+        if single and not pdf > 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+        f0, f1, f2, pdf = _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
+                              w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
+        if pdf > 0.0:
+            w0, w1, w2 = f0 / pdf, f1 / pdf, f2 / pdf
     if not pdf > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     lobe = _GLOSSY_T if wiz < 0.0 else _GLOSSY_R
@@ -229,68 +276,42 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
 
 @njit(allocates=True)
 def sample_weights(P, flags, wo, pts):
-    """First-channel sample weights (m, k) of :func:`sample` on row 0 of ``P`` for each
+    """First-channel single-scattering sample weights (m, k) on row 0 of ``P`` for each
     ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
     (:mod:`render.df._albedo`)."""
     m, k = wo.shape[0], pts.shape[0]
-    out = np.empty((m, k))
+    out = np.zeros((m, k))
     for i in range(m):
+        flip = wo[i, 2] < 0.0
+        woz = abs(wo[i, 2])
+        ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, 0, 0, flags, flip)
+        if not ok:
+            continue
         for j in range(k):
-            out[i, j] = sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], wo[i, 2], pts[j, 0],
-                               pts[j, 1], pts[j, 2])[4]
+            good, wix, wiy, wiz = _single_sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], woz,
+                                                 kc.clamp_u(pts[j, 0]), kc.clamp_u(pts[j, 1]),
+                                                 kc.clamp_u(pts[j, 2]), e_u, e_v, tx, ty,
+                                                 eta1, eta2)
+            if good:
+                w0, w1, w2, pdf = _value(P, 0, 0, flags, wo[i, 0], wo[i, 1], woz, wix, wiy,
+                                         wiz, e_u, e_v, norm, tx, ty, eta1, eta2)
+                if pdf > 0.0:
+                    out[i, j] = w0
     return out
+
 
 @njit
 def albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """Directional albedo ``tint E(wo)`` -> ``(a0, a1, a2)``, ``E`` read from this node's
-    table at ``T[t:]`` (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
-    flip = woz < 0.0
-    ok, e_u, e_v, norm, tx, ty, eta1, eta2 = _setup(P, row, b, flags, flip)
-    mu = abs(woz)
-    if not (ok and mu > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0
-    phi = math.atan2(abs(wox * ty - woy * tx), abs(wox * tx + woy * ty))
-    E = lane_table_albedo(T, t, mu, phi, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
-                          max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
-                          P[row, b + _IOR_IN])
-    return P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
+    """Directional albedo ``tint E(wo)`` (plus ``multiscatter_tint (1 - E(wo))`` where the
+    compensation is on) -> ``(a0, a1, a2)``, ``E`` read from this node's table at ``T[t:]``
+    (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
+    return mf_albedo(P, row, b, flags, wox, woy, woz, T, t)
 
 
 def albedo_table(row, flags: int) -> np.ndarray:
-    """The node table :func:`albedo` reads: a :func:`~render.df._albedo.node_table` for
-    one packed row (constant arguments), a :func:`~render.df._albedo.lanes_table` for
-    rows whose roughness or IOR differ (per-lane arguments).
-
-    Parameters
-    ----------
-    row : (SIGNATURE.width,) or (rows, SIGNATURE.width) float64
-        The node's packed slots.
-    flags : int
-        Its mode and thin-walled flags.
-    """
-    from render.df._common import ScatterMode
-
-    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
-    mode = flags & _MODE_MASK_
-    thin = (flags & _THIN_) != 0
-    key = (ScatterMode.scatter_reflect if mode == _REFLECT_ or thin
-           else {v: k for k, v in MODE_FLAGS.items()}[mode])
-    cols = [_RU, _RV] if key is ScatterMode.scatter_reflect else [_RU, _RV, _IOR_OUT, _IOR_IN]
-    ru = np.maximum(rows[:, _RU], kc.ROUGHNESS_MIN)
-    rv = np.maximum(rows[:, _RV], kc.ROUGHNESS_MIN)
-    if np.all(rows[:, cols] == rows[0, cols]):
-        if key is ScatterMode.scatter_reflect:
-            return node_table(SimpleGlossyBsdf, key, ru[0], rv[0])
-        o, i = kc.ior_pair(rows[0, _IOR_OUT], rows[0, _IOR_IN], False, False, True)
-        return node_table(SimpleGlossyBsdf, key, ru[0], rv[0], i / o, o / i)
-    if key is ScatterMode.scatter_reflect:
-        return lanes_table(SimpleGlossyBsdf, key, ru, rv)
-    iors = rows[:, [_IOR_OUT, _IOR_IN]]
-    etas = np.empty_like(iors)
-    for k, (ro, ri) in enumerate(iors):
-        o, i = kc.ior_pair(ro, ri, False, False, True)
-        etas[k] = i / o, o / i
-    return lanes_table(SimpleGlossyBsdf, key, ru, rv, iors, etas)
+    """The node table :func:`albedo` reads (:func:`render.df._albedo.glossy_albedo_table`:
+    a node table for one packed row, a lanes table for per-lane roughness or IOR)."""
+    return glossy_albedo_table(SimpleGlossyBsdf, row, flags)
 
 # --- the Python class ------------------------------------------------------------------
 
@@ -298,5 +319,5 @@ SimpleGlossyBsdf = df_class(
     "SimpleGlossyBsdf", "simple_glossy_bsdf", O_SIMPLE_GLOSSY, SIGNATURE,
     {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
      "scatter_reflect_transmit": Lobe.GLOSSY},
-    unsupported=("multiscatter_tint",), albedo_table=albedo_table, module=__name__)
+    albedo_table=albedo_table, module=__name__)
 simple_glossy_bsdf = SimpleGlossyBsdf

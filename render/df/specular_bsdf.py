@@ -34,7 +34,16 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED, TRANSMIT, Param, Signature
+from render.df._signature import (
+    MODE_MASK,
+    REFLECT,
+    REFLECT_TRANSMIT,
+    THIN_WALLED,
+    TRANSMIT,
+    Param,
+    Signature,
+)
+from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
 from render.program import O_SPECULAR, df_class
 
@@ -55,10 +64,13 @@ SIGNATURE = Signature("bsdf", (
     Param("tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("mode", "scatter_mode", "scatter_reflect", uniform=True),
     Param("handle", "string", "", uniform=True),
+    *FILM_PARAMS,
 ), context=("ior_outside", "ior_inside"))
 _TINT = SIGNATURE.offset("tint")
 _IOR_OUTSIDE = SIGNATURE.offset("ior_outside")
 _IOR_INSIDE = SIGNATURE.offset("ior_inside")
+_FILM_D = SIGNATURE.offset("thin_film_thickness")
+_FILM_N = SIGNATURE.offset("thin_film_ior")
 
 
 @njit
@@ -95,6 +107,12 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
         p_refl = 1.0 if bb * bb * (1.0 - c * c) > 1.0 and not thin else 0.0  # only TIR
     else:
         p_refl, _ = kc.fresnel_dielectric(c, eta2 / eta1)
+    d = P[row, b + _FILM_D]
+    film = mode == REFLECT_TRANSMIT and d > 0.0
+    if film:  # a thin_film's reflectance replaces Fresnel (render.df.thin_film)
+        r0, r1, r2 = film_rgb(c, eta1, P[row, b + _FILM_N], P[row, b + _FILM_N + 1],
+                              P[row, b + _FILM_N + 2], eta2, eta2, eta2, 0.0, 0.0, 0.0, d)
+        p_refl = (r0 + r1 + r2) / 3.0
     refl = kc.clamp_u(u1) < p_refl
     if refl:
         prob = p_refl
@@ -111,6 +129,14 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
         lobe = kc.LOBE_SPECULAR_TRANSMISSION
     if not (ok and prob > 0.0):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
+    if film:  # the film's colour: F_c / P reflected, (1 - F_c) / (1 - P) transmitted
+        if refl:
+            t0, t1, t2 = t0 * r0 / prob, t1 * r1 / prob, t2 * r2 / prob
+        else:
+            t0, t1, t2 = (t0 * (1.0 - r0) / prob, t1 * (1.0 - r1) / prob,
+                          t2 * (1.0 - r2) / prob)
+        if not (t0 > 0.0 or t1 > 0.0 or t2 > 0.0):
+            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     return wix, wiy, kc.mirror_z(wiz, flip), prob, t0, t1, t2, lobe
 
 

@@ -176,12 +176,13 @@ def test_bind_passes_renderer_context_to_classes_that_take_it():
         df.diffuse_reflection_bsdf().bind(s, eta=1.5)
 
 
-def test_bind_refuses_unimplemented_parameters_and_dfs():
+def test_bind_passes_multiscatter_tint_and_other_dfs():
     s = square([[0.5, 0.5]])
-    # simple_glossy_bsdf in render.df has no multiscatter_tint yet: the default is fine
-    df.simple_glossy_bsdf(roughness_u=0.2, multiscatter_tint=0.0).bind(s)
-    with pytest.raises(ValueError, match="multiscatter_tint.*not implemented"):
-        df.simple_glossy_bsdf(roughness_u=0.2, multiscatter_tint=0.5).bind(s)
+    # multiscatter_tint binds (issue 16): the compensation lobe raises the albedo
+    wo = np.array([[0.0, 0.6, 0.8]])
+    single = df.simple_glossy_bsdf(roughness_u=0.8).bind(s).albedo(wo)
+    comp = df.simple_glossy_bsdf(roughness_u=0.8, multiscatter_tint=0.5).bind(s).albedo(wo)
+    assert np.allclose(comp, single + 0.5 * (1.0 - single))
     from render.df import AnisotropicVdf
 
     assert isinstance(df.anisotropic_vdf(directional_bias=-0.5).bind(s), AnisotropicVdf)

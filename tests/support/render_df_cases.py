@@ -68,6 +68,10 @@ class DfCase:
     thin : bool
     albedo_tol : float
         Accuracy of ``albedo()`` (0 for closed forms; the table accuracy otherwise).
+    lossless_tol : float
+        For ``lossless`` cases whose losslessness rests on a table (the energy
+        compensation of ``multiscatter_tint``): the table's accuracy, added to the
+        furnace's 3 sigma.
     """
 
     id: str
@@ -82,6 +86,7 @@ class DfCase:
     ior: tuple[float, float] = (1.0, 1.0)
     thin: bool = False
     albedo_tol: float = 1e-9
+    lossless_tol: float = 0.0
     skip_albedo_wos: tuple = field(default_factory=tuple)
     #: viewing directions of the chi-square tests, if not CHI2_WOS
     chi2_wos: tuple | None = None
@@ -146,7 +151,10 @@ def check_consistency(case: DfCase, rng: np.random.Generator, n: int = 40_000) -
     assert np.array_equal(e.max(axis=1) > 0, p > 0), "pdf must be positive exactly where eval is"
 
 
-def check_no_nan(case: DfCase, rng: np.random.Generator) -> None:
+def check_no_nan(case: DfCase, rng: np.random.Generator, surface: bool = True) -> None:
+    """No NaN, inf or negative values at edge and random directions; a surface df
+    (``surface``; not a hair fibre, which scatters from every side) scatters nothing
+    from its tangent plane."""
     bsdf = case.make()
     d = edge_dirs()
     wo = np.repeat(d, len(d), axis=0)
@@ -171,7 +179,8 @@ def check_no_nan(case: DfCase, rng: np.random.Generator) -> None:
     assert np.all(np.isfinite(a)) and np.all(a >= 0) and np.all(a <= 1.0 + 1e-12)
     # tangent-plane viewing directions scatter nothing
     flat = np.abs(wo[:, 2]) <= 1e-10
-    assert not np.any(e[flat]) and not np.any(p[flat]) and not np.any(s.valid[flat])
+    if surface:
+        assert not np.any(e[flat]) and not np.any(p[flat]) and not np.any(s.valid[flat])
 
 
 def check_chi2(case: DfCase, theta_phi, test_count: int) -> None:
@@ -277,9 +286,12 @@ def check_integrals(case: DfCase, theta_phi) -> dict:
     success = s.valid.mean()
     out = {"mc": mean, "se": se, "success": success}
     # furnace
-    assert np.all(mean <= 1.0 + 3 * se + 1e-12), f"white furnace gains energy: {mean} ± {se}"
+    # (a lobe made lossless by a table, multiscatter_tint's compensation, is exact only to
+    # the table's accuracy: lossless_tol, 0 for every other case)
+    assert np.all(mean <= 1.0 + 3 * se + case.lossless_tol + 1e-12), (
+        f"white furnace gains energy: {mean} ± {se}")
     if case.lossless:
-        assert np.all(np.abs(mean - 1.0) <= 3 * se + 1e-12), (
+        assert np.all(np.abs(mean - 1.0) <= 3 * se + case.lossless_tol + 1e-12), (
             f"lossless lobe loses energy: {mean} ± {se}"
         )
     alb = bsdf.albedo(wo[None])[0]

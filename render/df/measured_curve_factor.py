@@ -1,0 +1,65 @@
+"""MDL ``df::measured_curve_factor``: a Bsdf scaled by a measured curve of the half-vector angle.
+
+MDL signature (1.1)::
+
+    bsdf measured_curve_factor(color[<N>] curve_values, bsdf base = bsdf());
+
+Model (libbsdf, ``reference/mdl-distribution-functions.md`` §4): the factor is the
+measured curve of ``measured_curve_layer`` (``N`` colours equally spaced in angle over
+``[0, pi/2]``, linear in between, saturated) at ``c = wo.h`` for the reflection half
+vector ``h`` (a transmitted ``wi`` mirrored through the tangent plane first; 0 where
+``wo.h < 0``)::
+
+    eval = C(wo.h) base.eval(wo, wi),     pdf = base.pdf (0 where the product is)
+
+Energy: never more than the base (``C <= 1``).  ``albedo`` is integrated through the
+base's sampler (the interpreter's control variate), exact for a constant curve.
+"""
+
+from __future__ import annotations
+
+from render.df._layer import measured_curve1, scale_cosine
+from render.df._signature import REQUIRED, Param, Signature
+from render.jit import njit
+from render.program import O_MEASURED_CURVE_FACTOR, df_class
+
+__all__ = ["MeasuredCurveFactor", "measured_curve_factor", "SIGNATURE", "scale",
+           "curve_constant"]
+
+#: ``df::measured_curve_factor`` (``base`` None: MDL's ``bsdf()``)
+SIGNATURE = Signature("bsdf", (
+    Param("curve_values", "color[]", REQUIRED, uniform=True),
+    Param("base", "bsdf", None),
+))
+_N = SIGNATURE.offset("curve_values")
+_AT = SIGNATURE.width
+
+
+@njit
+def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
+    """the factor ``C(wo.h)`` per channel (0 where ``wo.h < 0``)."""
+    c = scale_cosine(wox, woy, woz, wix, wiy, wiz)
+    if c < 0.0:
+        return 0.0, 0.0, 0.0
+    n = int(P[row, b + _N])
+    at = b + _AT
+    return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
+            measured_curve1(P, row, at, n, c, 2))
+
+
+@njit
+def curve_constant(P, row, b, flags):
+    """The curve takes one value at every cosine: the albedo needs no quadrature."""
+    n = int(P[row, b + _N])
+    at = b + _AT
+    for j in range(1, n):
+        for k in range(3):
+            if (min(max(P[row, at + 3 * j + k], 0.0), 1.0)
+                    != min(max(P[row, at + k], 0.0), 1.0)):
+                return False
+    return True
+
+
+MeasuredCurveFactor = df_class("MeasuredCurveFactor", "measured_curve_factor",
+                               O_MEASURED_CURVE_FACTOR, SIGNATURE, module=__name__)
+measured_curve_factor = MeasuredCurveFactor

@@ -1,0 +1,158 @@
+"""MDL ``df::measured_curve_layer`` and its colour form: a layer weighted by a measured curve.
+
+MDL signatures::
+
+    bsdf measured_curve_layer(color[<N>] curve_values, float weight = 1.0,
+                              bsdf layer = bsdf(), bsdf base = bsdf(),
+                              float3 normal = state::normal());                  // 1.1
+    bsdf color_measured_curve_layer(color[<N>] curve_values, color weight = color(1.0),
+                                    bsdf layer = bsdf(), bsdf base = bsdf(),
+                                    float3 normal = state::normal());            // 1.4
+
+Model (libbsdf, ``reference/mdl-distribution-functions.md`` §3.2): the directional
+layering of :mod:`render.df._layer` with the curve ``C(c)`` read from ``curve_values``:
+``N`` colours equally spaced in angle over ``[0, pi/2]`` (``curve_values[0]`` at normal
+incidence), linear in the angle ``acos(c)`` between them, saturated::
+
+    eval = w C(|wo.h|) layer.eval(wo_L, wi_L) + (1 - w max(C(nk1), C(nk2), Ĉ(wo), Ĉ(wi))) base.eval
+
+with ``w = saturate(weight)`` folded into ``C`` per channel (the colour form), the
+reflection half vector (a transmitted ``wi`` mirrored; libbsdf uses the refraction half
+vector only for the Fresnel layers) and the curve-weighted albedo ``Ĉ`` that keeps the
+node from gaining energy (the bound: :mod:`render.df._layer`).
+
+The curve is uniform: one array for every lane, packed after the node's slots
+(:data:`render.df._signature.ARRAYS`).
+"""
+
+from __future__ import annotations
+
+from render.df._layer import curve_estimates, curve_factors, curve_geometry, measured_curve1
+from render.df._signature import REQUIRED, Param, Signature
+from render.jit import njit
+from render.program import O_MEASURED_CURVE_LAYER, df_class
+
+__all__ = [
+    "MeasuredCurveLayer",
+    "measured_curve_layer",
+    "ColorMeasuredCurveLayer",
+    "color_measured_curve_layer",
+    "SIGNATURE",
+    "COLOR_SIGNATURE",
+    "layer_factors",
+    "layer_estimates",
+    "layer_possible",
+    "curve_h",
+    "curve_nk",
+    "curve_constant",
+]
+
+
+# --- signature and kernels (the compiled render core) ---------------------------------
+def _params(weight: Param) -> tuple:
+    return (Param("curve_values", "color[]", REQUIRED, uniform=True), weight,
+            Param("layer", "bsdf", None), Param("base", "bsdf", None),
+            Param("normal", "float3", "state::normal()"))
+
+
+#: ``df::measured_curve_layer`` (the float weight packed as a grey colour)
+SIGNATURE = Signature("bsdf", _params(
+    Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color")))
+#: ``df::color_measured_curve_layer`` (MDL 1.4)
+COLOR_SIGNATURE = Signature("bsdf", _params(
+    Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0))))
+_N = COLOR_SIGNATURE.offset("curve_values")
+_WEIGHT = COLOR_SIGNATURE.offset("weight")
+_AT = COLOR_SIGNATURE.width  # the curve's colours follow the node's slots
+
+
+@njit
+def _curve3(P, row, b, c):
+    """``C(c)`` per channel."""
+    n = int(P[row, b + _N])
+    at = b + _AT
+    return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
+            measured_curve1(P, row, at, n, c, 2))
+
+
+@njit
+def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats)."""
+    kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
+    h0, h1, h2 = _curve3(P, row, b, kh)
+    a0, a1, a2 = _curve3(P, row, b, nk1)
+    r0, r1, r2 = _curve3(P, row, b, nk2)
+    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+
+
+@njit
+def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
+                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
+    """``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w max(C(nk1), C(nk2), Ĉ(wo),
+    Ĉ(wi)))`` per channel (the interpreter masks the layer where frames disagree)."""
+    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
+                                     wilx, wily, wilz)
+    return curve_factors(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2],
+                         h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2)
+
+
+@njit
+def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
+    """``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
+    s = -1.0 if wolz < 0.0 else 1.0
+    c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
+    return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
+                           P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
+
+
+@njit
+def layer_possible(P, row, b, flags):
+    """``(layer, base)`` can contribute: some channel of ``w`` and of the curve
+    positive; not ``w == 1`` with the curve 1 everywhere."""
+    n = int(P[row, b + _N])
+    at = b + _AT
+    pos_l = False
+    one = True
+    for k in range(3):
+        w = P[row, b + _WEIGHT + k]
+        for j in range(n):
+            v = min(max(P[row, at + 3 * j + k], 0.0), 1.0)
+            pos_l = pos_l or w * v > 0.0
+            one = one and v == 1.0 and w == 1.0
+    return pos_l, not one
+
+
+@njit
+def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
+    """``C(|v.h|)`` for layer-frame ``v`` and ``x`` (what the Ĉ table integrates)."""
+    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
+    return h0, h1, h2
+
+
+@njit
+def curve_nk(P, row, b, flags, vx, vy, vz):
+    """``C(|v.z|)`` (the control variate's curve)."""
+    return _curve3(P, row, b, abs(vz))
+
+
+@njit
+def curve_constant(P, row, b, flags):
+    """The curve takes one value at every cosine (every colour equal)."""
+    n = int(P[row, b + _N])
+    at = b + _AT
+    for j in range(1, n):
+        for k in range(3):
+            if (min(max(P[row, at + 3 * j + k], 0.0), 1.0)
+                    != min(max(P[row, at + k], 0.0), 1.0)):
+                return False
+    return True
+
+
+# --- the Python classes ----------------------------------------------------------------
+
+MeasuredCurveLayer = df_class("MeasuredCurveLayer", "measured_curve_layer",
+                              O_MEASURED_CURVE_LAYER, SIGNATURE, module=__name__)
+measured_curve_layer = MeasuredCurveLayer
+ColorMeasuredCurveLayer = df_class("ColorMeasuredCurveLayer", "color_measured_curve_layer",
+                                   O_MEASURED_CURVE_LAYER, COLOR_SIGNATURE, module=__name__)
+color_measured_curve_layer = ColorMeasuredCurveLayer
