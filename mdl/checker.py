@@ -53,7 +53,7 @@ from mdl.entities import (
 from mdl.loader import Loader, ModuleText, _CycleError, _NotFound, not_found_fix
 from mdl.parser import parse_module
 
-__all__ = ["check_module", "Checker", "MATERIAL_STRUCTS", "is_material_level"]
+__all__ = ["check_module", "check_expression", "Checker", "MATERIAL_STRUCTS", "is_material_level"]
 
 #: the built-in structs of the material model (material level only)
 MATERIAL_STRUCTS = ("material", "material_surface", "material_emission", "material_volume",
@@ -102,6 +102,7 @@ class Checker:
         self.varying_loops: set[int] = set()
         self.changed = False
         self.final = True
+        self.cacheable = False
 
     # ------------------------------------------------------------------ diagnostics
     def error(self, message: str, where, fix: str = "") -> None:
@@ -140,6 +141,8 @@ class Checker:
         if self.builtins is not None:
             imported.append(self.builtins)
         m.key = self.loader.content_key(self.mt, imported)
+        if not self.errors and self.cacheable and m.key in _CHECKED:
+            return _CHECKED[m.key]
         self.declare_types()
         self.resolve_types()
         self.declare_values()
@@ -148,6 +151,8 @@ class Checker:
         m.diagnostics = self.warnings
         if self.errors:
             raise MdlError(self.errors + self.warnings)
+        if self.cacheable:
+            _remember(m)
         return m
 
     def import_decl(self, d) -> CheckedModule | None:
@@ -218,6 +223,8 @@ class Checker:
                 for e in exports[n]:
                     if e not in self.m.using[n]:
                         self.m.using[n].append(e)
+                    if d.exported and e not in self.m.scope.setdefault(n, []):
+                        self.m.scope[n].append(e)  # 'export using' re-exports
             # qualified access comes with 'using' too (MDL imports the module)
             for a in aliases:
                 self.m.imports.setdefault(a, mod)
@@ -264,9 +271,9 @@ class Checker:
     def declare_types(self) -> None:
         for d in self.tree.decls:
             if isinstance(d, A.StructDecl):
-                st = T.StructType(self.qualify(d.name), builtin=(self.m.qname == "::builtins"
-                                                                  and d.name in MATERIAL_STRUCTS),
-                                  module=self.m)
+                builtin = self.m.qname == "::builtins" and d.name in MATERIAL_STRUCTS
+                st = T.StructType("::" + d.name if builtin else self.qualify(d.name),
+                                  builtin=builtin, module=self.m)
                 self.add(d.name, TypeEntity(d.name, self.m, d.exported or self.is_std,
                                             d.name_span, st), d.name_span, "struct")
             elif isinstance(d, A.EnumDecl):
@@ -584,15 +591,28 @@ class Checker:
             if self.builtins is not None and n in self.builtins.scope:
                 return self.builtins.scope[n]
             return []
+        if len(parts) == 1:  # ::x
+            self.poison(f"'{name.text}' names no module", name,
+                        f"write {parts[0]}, or module::{parts[0]}")
         mod = self.module_for(parts[:-1], name.absolute)
         n = parts[-1]
         if mod is None:
             modname = "::".join(parts[:-1])
-            std = modname in ("math", "state", "tex", "df", "anno", "debug", "limits", "base",
-                              "scene")
-            self.poison(f"module '{modname}' is not imported", name,
-                        f"add 'import ::{modname}::*;' after the mdl line"
-                        + ("" if std else f" (or check the spelling of '{modname}')"))
+            if self.loader.find("::" + modname) is not None:
+                self.poison(f"module '{modname}' is not imported", name,
+                            f"add 'import ::{modname}::*;' after the mdl line")
+            aliases = [a for a in self.m.imports if "::" not in a]
+            hint = did_you_mean(modname, aliases + [q.removeprefix("::") for q in
+                                                    self.loader.known_names()])
+            text = self.src.text[name.span.start:name.span.end]
+            if len(parts) == 2 and not name.absolute and ":: " in text:
+                hint = (hint + " " if hint else "") + \
+                    "(a named argument is written 'name: value')"
+            extra = self.loader.missing_hint("::" + modname)
+            hint = "; ".join(x for x in (hint, extra) if x)
+            self.poison(f"unknown module '{modname}'", name,
+                        hint or "import it: the module must be beside this one, on the "
+                        "search path, or one of the workbench's")
         if isinstance(mod, _Partial):
             if n not in mod.names:
                 self.poison(f"'{n}' is not imported from module '{mod.module.qname}'", name,
@@ -729,6 +749,10 @@ class Checker:
         d: A.FunctionDecl = o.decl
         self.fn = o
         self.material_body = o.is_material
+        if o.kind != "mdl" or d.body is None:
+            self.fn = None
+            self.material_body = False
+            return
         if not o.is_material and not self.is_std:
             for p in o.params:
                 if is_material_level(p.type):
@@ -1608,7 +1632,7 @@ class Checker:
                     return f"has no parameter '{a.name}'", a
                 j = names.index(a.name)
                 if slots[j] is not None:
-                    return f"gets argument '{a.name}' twice", a
+                    return f"gets the argument '{a.name}' twice", a
                 slots[j] = k
         for j, p in enumerate(o.params):
             if slots[j] is None and p.default is None:
@@ -1664,9 +1688,14 @@ class Checker:
                 fix = self.arg_fix(reasons[0][0], msg, e, infos)
                 self.poison(f"{label} {msg}", where, fix)
             types = ", ".join(str(i.type) for i in infos)
-            self.poison(f"no overload of '{label}' takes ({types})", e.callee,
-                        "overloads: " + "; ".join(o.signature() for o in overloads[:6])
-                        + ("; ..." if len(overloads) > 6 else ""))
+            fix = "overloads: " + "; ".join(o.signature() for o in overloads[:6]) + (
+                "; ..." if len(overloads) > 6 else "")
+            elems = {str(p.type.elem) for o in overloads for p in o.params
+                     if isinstance(p.type, T.ArrayT)}
+            wrapped = [str(i.type) for i in infos if str(i.type) in elems]
+            if wrapped:
+                fix = f"wrap it in an array: {wrapped[0]}[]({wrapped[0]}(...), ...)"
+            self.poison(f"no overload of '{label}' takes ({types})", e.callee, fix)
         best = [v for v in viable if not any(
             all(x <= y for x, y in zip(w[1][1], v[1][1], strict=True)) and w[1][1] != v[1][1]
             for w in viable)]
@@ -1691,6 +1720,8 @@ class Checker:
             return f"add {p}: <value>"
         if msg.startswith("takes"):
             return "remove the extra arguments"
+        if "twice" in msg:
+            return "give each argument once"
         if "must be" in msg:
             want = msg.split("must be ")[1].split(",")[0].removeprefix("a ").removeprefix(
                 "an ").removeprefix("uniform ")
@@ -1704,6 +1735,10 @@ class Checker:
                 return "write an integer, without a decimal point, or int(x)"
             if "[" in want and got == want.split("[")[0]:
                 return f"wrap it in an array: {want.split('[')[0]}[](...)"
+            p = next((p for p in o.params if f"'{p.name}'" in msg), None)
+            if p is not None and isinstance(p.type, T.EnumType) and got == "string":
+                return ("an enum value is a name, not a string: one of "
+                        + ", ".join(n for n, _ in p.type.values))
         return ""
 
     def finish_call(self, e: A.Call, o: Overload, slots, sizes, infos, label) -> ExprInfo:
@@ -1961,16 +1996,24 @@ class Checker:
         suf = callee.suffix
         if suf.deferred is not None:
             self.poison("T[<N>](...) is not a value; write T[](...) or T[N](...)", suf)
+        size_node = None
         if suf.size is not None:
             si = self.expr(suf.size)
             if si.target is not None and isinstance(si.target, SizeName):
                 size = si.target.var
             else:
                 size = self.fold_int(suf.size, si, "an array size")
-        label = f"{callee.element.text}[{'' if suf.size is None else '...'}]"
-        return self.array_elements(e, elem, size, label)
+                size_node = suf.size
+                if size < 1:
+                    self.poison(f"array size must be 1 or more, got {size}", suf.size,
+                                f"write {callee.element.text}[](...) to take the size from "
+                                "the elements")
+        shown = "" if suf.size is None else (str(size) if isinstance(size, int) else "N")
+        label = f"{callee.element.text}[{shown}]"
+        return self.array_elements(e, elem, size, label, size_node)
 
-    def array_elements(self, e: A.Call, elem: T.Type, size, label: str) -> ExprInfo:
+    def array_elements(self, e: A.Call, elem: T.Type, size, label: str,
+                       size_node=None) -> ExprInfo:
         infos = self.args_info(e)
         for a in e.args:
             if a.name is not None:
@@ -1978,17 +2021,20 @@ class Checker:
                             f"'{a.name}'", a, f"remove '{a.name}:'")
         n = len(infos)
         if isinstance(size, int) and size != n and n:
-            self.poison(f"array declared with {size} elements but initialized with {n}", e,
-                        f"give {size} elements, or write T[](...) to take the size from them")
+            self.poison(f"array declared with {size} elements but initialized with {n}: "
+                        f"{label}(...) has {n} element{'s' if n != 1 else ''}, not {size}",
+                        size_node or e, f"give {size} element{'s' if size != 1 else ''}, or "
+                        f"write T[](...) to take the size from them")
         if not infos and size is None:
-            self.poison(f"{label}() has no elements", e, "give at least one element")
+            self.poison(f"{label}() has no elements", e, "give at least one element: "
+                        f"{label}(..., ...)")
         level = UNIFORM
-        for a, i in zip(e.args, infos, strict=True):
+        for k, (a, i) in enumerate(zip(e.args, infos, strict=True)):
             if isinstance(i.type, T.ErrorType):
                 raise _Poison()
             if T.implicit_cost(i.type, elem) is None:
-                self.poison(f"array element must be {_a(elem)}, got {_a(i.type)}", a.value,
-                            self.arg_fix_types(elem, i.type))
+                self.poison(f"element {k + 1} of {label}(...) must be {_a(elem)}, got "
+                            f"{_a(i.type)}", a.value, self.arg_fix_types(elem, i.type))
             if i.type != elem:
                 i.convert = elem
             level = max(level, i.level)
@@ -2007,6 +2053,14 @@ class Checker:
     def arg_fix_types(self, want: T.Type, got: T.Type) -> str:
         if isinstance(want, (T.Vector, T.Color)) and isinstance(got, T.Scalar):
             return f"write {want}(x)"
+        if {str(want), str(got)} == {"float3", "color"}:
+            return f"convert with {want}(...)"
+        if want == T.INT and isinstance(got, T.Scalar):
+            return "write an integer, without a decimal point, or int(x)"
+        if isinstance(want, T.StructType) and isinstance(got, T.DF):
+            return f"wrap it: {want.name}(weight: ..., component: ...)"
+        if isinstance(want, T.StructType) and isinstance(got, T.StructType):
+            return f"write {got.name}[](...) for {got.name} elements"
         return ""
 
     # ------------------------------------------------------------------ conversions
@@ -2092,8 +2146,62 @@ def _construct(kind: str, t: T.Type, vals: list, types: list):
     return construct(kind, t, vals, types)
 
 
-def check_module(loader: Loader, mt: ModuleText) -> CheckedModule:
-    """Parse and check one module (its imports through ``loader``)."""
+#: checked modules by content key (module text, name, file and the keys of its imports):
+#: a module is checked once per process however many loaders (scenes) read it
+_CHECKED: dict[str, CheckedModule] = {}
+_CHECKED_LIMIT = 512
+#: parsed trees by (name, file, text)
+_PARSED: dict[tuple, A.Module] = {}
+
+
+def _remember(m: CheckedModule) -> None:
+    if len(_CHECKED) >= _CHECKED_LIMIT:
+        _CHECKED.pop(next(iter(_CHECKED)))
+    _CHECKED[m.key] = m
+
+
+def check_expression(loader: Loader, context: CheckedModule, src: Source, tree=None):
+    """Check one expression (``src``, e.g. a material call in a scene file) in the scope
+    of ``context`` (a checked module of imports); returns ``(tree, info)``.  The
+    expression may build materials and distribution functions.
+
+    Raises
+    ------
+    MdlError
+        Its syntax and type errors, located in ``src``.
+    """
+    from mdl.parser import parse_expression
+
+    if tree is None:
+        tree = parse_expression(src)
+    mt = ModuleText(context.qname, context.source.text, context.source.name, context.path,
+                    context.kind)
+    c = Checker(loader, mt, context.tree, src)
+    c.m = context
+    c.builtins = loader.load("::builtins")
+    c.material_body = True
+    c.scopes = [{}]
+    try:
+        info = c.expr(tree)
+    except _Poison:
+        info = None
+    if c.errors:
+        raise MdlError(c.errors + c.warnings)
+    return tree, info
+
+
+def check_module(loader: Loader, mt: ModuleText, cacheable: bool = True) -> CheckedModule:
+    """Parse and check one module (its imports through ``loader``); a module whose
+    content key was checked before in this process is not checked again (``cacheable``:
+    a module registered under its name, which other modules may import)."""
     src = Source(mt.filename, mt.text)
-    tree = parse_module(src)
-    return Checker(loader, mt, tree, src).run()
+    key = (mt.qname, mt.filename, mt.text)
+    tree = _PARSED.get(key)
+    if tree is None:
+        tree = parse_module(src)
+        if len(_PARSED) >= _CHECKED_LIMIT:
+            _PARSED.pop(next(iter(_PARSED)))
+        _PARSED[key] = tree
+    c = Checker(loader, mt, tree, src)
+    c.cacheable = cacheable
+    return c.run()

@@ -114,7 +114,7 @@ class Overload(Entity):
     @property
     def is_material(self) -> bool:
         return (isinstance(self.ret, T.StructType) and self.ret.builtin
-                and self.ret.name == "material")
+                and self.ret.qname == "::material")
 
     def signature(self) -> str:
         """``float2 point_along_pwc(float curve_position, pw_point[<N>] pwc)``."""

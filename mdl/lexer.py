@@ -45,6 +45,7 @@ _PUNCT = [">>>=", "<<=", ">>=", ">>>", "::", "[[", "&&", "||", "==", "!=", "<=",
           "!", "~", "&", "|", "^"]
 _PUNCT_RE = re.compile("|".join(re.escape(p) for p in _PUNCT))
 _IDENT = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+_DIGITS = frozenset("0123456789")
 _WORD = re.compile(r"[A-Za-z0-9_.]+")
 _HEX = re.compile(r"0[xX][0-9A-Fa-f]+")
 _FLOAT = re.compile(r"(?:\d+\.\d*|\.\d+|\d+)(?:[eE][+-]?\d+)?[fFdD]?")
@@ -89,7 +90,7 @@ class _Lexer:
             if text.startswith("/*", i):
                 i = self.block_comment(i)
                 continue
-            if c.isdigit() or (c == "." and i + 1 < n and text[i + 1].isdigit()):
+            if c in _DIGITS or (c == "." and i + 1 < n and text[i + 1] in _DIGITS):
                 i = self.number(i)
                 continue
             if c.isalpha() and c.isascii():

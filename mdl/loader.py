@@ -70,7 +70,7 @@ class ModuleText:
 
 def module_file(qname: str) -> Path:
     """``::a::b`` -> ``a/b.mdl``."""
-    parts = [p for p in qname.split("::") if p]
+    parts = [p for p in qname.split("::") if p] or ["_"]
     return Path(*parts[:-1], parts[-1] + ".mdl")
 
 
@@ -99,14 +99,16 @@ class Loader:
 
     # ------------------------------------------------------------------ finding
     def find(self, qname: str, importer: CheckedModule | None = None) -> ModuleText | None:
+        """Standard modules, then files (beside the importing module, then the search
+        folders), then the providers; a provider's ``fixed()`` names (a renderer's
+        ``::df``) cannot be shadowed by files."""
         name = qname.removeprefix("::")
         if "::" not in name and name in stdlib.STANDARD_MODULES:
             return ModuleText(qname, stdlib.source(name), f"<mdl standard module ::{name}>",
                               None, "std")
         for p in self.providers:
-            found = p.find(qname)
-            if found is not None:
-                return found
+            if qname in getattr(p, "fixed", lambda: ())():
+                return p.find(qname)
         rel = module_file(qname)
         folders = []
         if importer is not None and importer.path is not None:
@@ -116,6 +118,10 @@ class Loader:
             f = d / rel
             if f.is_file():
                 return self.read(f, qname)
+        for p in self.providers:
+            found = p.find(qname)
+            if found is not None:
+                return found
         return None
 
     def read(self, path: Path, qname: str | None = None) -> ModuleText:
@@ -139,6 +145,14 @@ class Loader:
                                        d.loc.__class__(str(path), line, 1, 1, ""),
                                        d.fix)]) from None
         return ModuleText(qname or qname_of_path(path), text, str(path), path, "file")
+
+    def missing_hint(self, qname: str) -> str:
+        """What the providers say about a module they do not have (a profile's search
+        folders...), or ""."""
+        hints = [getattr(p, "hint", lambda q: "")(qname) for p in self.providers]
+        folders = ", ".join(str(d) for d in self.search_path)
+        mdl = f"there is no {module_file(qname)} in {folders}" if folders else ""
+        return "; ".join(x for x in [mdl, *hints] if x)
 
     def known_names(self) -> list[str]:
         """Module names this loader could load (for suggestions)."""
@@ -189,7 +203,7 @@ class Loader:
 
         self._loading.append(mt.qname)
         try:
-            module = check_module(self, mt)
+            module = check_module(self, mt, cacheable=register)
         except MdlError as e:
             if register:
                 self._failed[mt.qname] = e
@@ -201,9 +215,12 @@ class Loader:
         return module
 
     def content_key(self, mt: ModuleText, imports: Iterable[CheckedModule]) -> str:
-        """A hash of a module's text and the keys of everything it imports."""
+        """A hash of a module's text, name and file, and the keys of everything it
+        imports: equal keys mean equal checked modules."""
         h = hashlib.sha256(mt.text.encode())
         h.update(mt.qname.encode())
+        h.update(str(mt.path).encode())
+        h.update(mt.kind.encode())
         for m in sorted(imports, key=lambda m: m.qname):
             h.update(m.key.encode())
         return h.hexdigest()[:20]

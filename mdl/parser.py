@@ -822,6 +822,11 @@ class _Parser:
                     suffix = self.array_suffix()
                     e = A.ArrayType(self.span_from(start), e.name, suffix)
                     continue
+                if isinstance(e, A.Ref) and self.peek().kind == "]":
+                    self.advance(), self.advance()
+                    self.fail(f"expected '(' after '{e.name.text}[]', found "
+                              f"{self.describe(self.tok)}",
+                              fix=f"an array value is written {e.name.text}[](element, ...)")
                 self.advance()
                 self.enter()
                 index = self.expression()
