@@ -124,7 +124,15 @@ class Overload(Entity):
             t = str(p.type)
             if isinstance(p.type, T.ArrayT) and p.sizevar is not None:
                 t = f"{p.type.elem}[<{p.sizevar.name}>]"
-            ps.append(f"{q}{t} {p.name}" + ("" if p.default is None else " = ..."))
+            default = ""
+            if p.default is not None:
+                from mdl.printer import format_expression
+
+                try:
+                    default = " = " + format_expression(p.default)
+                except TypeError:
+                    default = " = ..."
+            ps.append(f"{q}{t} {p.name}{default}")
         ret = ("uniform " if self.ret_uniform else "") + str(self.ret)
         return f"{ret} {self.name}({', '.join(ps)})" + (
             f" {self.qualifier}" if self.qualifier else "")
