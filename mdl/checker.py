@@ -105,6 +105,10 @@ class Checker:
         self.cacheable = False
 
     # ------------------------------------------------------------------ diagnostics
+    def order(self, d: Diagnostic):
+        """Diagnostics of this module first, by position; then those of imports."""
+        return (d.loc.file != self.src.name, d.loc.line, d.loc.col)
+
     def error(self, message: str, where, fix: str = "") -> None:
         span = where if isinstance(where, Span) else where.span
         if not self.final:
@@ -148,9 +152,9 @@ class Checker:
         self.declare_values()
         self.compute_reads_state()
         self.check_definitions()
-        m.diagnostics = self.warnings
+        m.diagnostics = sorted(self.warnings, key=self.order)
         if self.errors:
-            raise MdlError(self.errors + self.warnings)
+            raise MdlError(sorted(self.errors, key=self.order) + m.diagnostics)
         if self.cacheable:
             _remember(m)
         return m
@@ -357,21 +361,23 @@ class Checker:
                 ft = T.ERROR
             st.fields.append(T.FieldInfo(f.name, ft, f.default, q == "uniform",
                                          self.annotations(f.annotations)))
-            params.append(ParamInfo(f.name, ft, q, f.default, (), f.name_span))
+            params.append(ParamInfo(f.name, ft, q, f.default, (), f.name_span,
+                                    optional=True))
         ctor = Overload(d.name, self.m, d.exported or self.is_std, d.name_span, params, st,
                         False, None, d, "struct")
         self.m.scope[d.name].append(ctor)
         self.m.overloads.append(ctor)
 
     def declare_values(self) -> None:
-        for d in self.tree.decls:
-            if isinstance(d, A.ConstDecl):
-                self.declare_const(d)
-            elif isinstance(d, A.AnnotationDecl):
+        for d in self.tree.decls:  # annotations first: declarations anywhere may use them
+            if isinstance(d, A.AnnotationDecl):
                 params = [self.param_info(p, {}) for p in d.params]
                 self.add(d.name, AnnotationEntity(d.name, self.m, d.exported or self.is_std,
                                                   d.name_span, params), d.name_span,
                          "annotation")
+        for d in self.tree.decls:
+            if isinstance(d, A.ConstDecl):
+                self.declare_const(d)
             elif isinstance(d, A.FunctionDecl):
                 self.declare_function(d)
             elif isinstance(d, A.ModuleAnnotations):
@@ -1635,7 +1641,7 @@ class Checker:
                     return f"gets the argument '{a.name}' twice", a
                 slots[j] = k
         for j, p in enumerate(o.params):
-            if slots[j] is None and p.default is None:
+            if slots[j] is None and p.required:
                 return f"needs the argument '{p.name}' ({p.type})", e
         costs = []
         sizes: dict = {}

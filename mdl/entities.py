@@ -79,6 +79,7 @@ class ParamInfo:
     annotations: tuple = ()       # AnnotationValue
     span: Span | None = None
     sizevar: T.SizeVar | None = None  # the size name this parameter binds (T[<N>])
+    optional: bool = False            # a struct field without initializer (its type's zero)
 
     @property
     def uniform(self) -> bool:
@@ -86,7 +87,7 @@ class ParamInfo:
 
     @property
     def required(self) -> bool:
-        return self.default is None
+        return self.default is None and not self.optional
 
 
 @dataclass(eq=False)

@@ -115,7 +115,10 @@ def _expr_raw(e) -> str:
     if isinstance(e, A.Index):
         return f"{_expr(e.obj, _POSTFIX)}[{_expr(e.index, 0)}]"
     if isinstance(e, A.Member):
-        return f"{_expr(e.obj, _POSTFIX)}.{e.name}"
+        base = _expr(e.obj, _POSTFIX)
+        if isinstance(e.obj, A.Literal) and e.obj.kind in ("int", "float", "double"):
+            base = f"({base})"  # 0.x would lex as a number
+        return f"{base}.{e.name}"
     if isinstance(e, A.Postfix):
         return _expr(e.operand, _POSTFIX) + e.op
     if isinstance(e, A.Unary):

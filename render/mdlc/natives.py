@@ -214,6 +214,16 @@ def materials_module_text() -> str:
     return "\n".join(out) + "\n"
 
 
+#: declarations that differ from what the Python annotations say: chapter 10's noise
+#: works in double (Listings 10.1-10.5), so a double3 point passes without a cast
+_DECLARED = {
+    "perlin_noise": "export double perlin_noise(double3 point) varying;",
+    "summed_perlin_noise": "export double summed_perlin_noise(double3 point, uniform int "
+                           "level_count = 4, uniform double level_scale = 0.5, uniform double "
+                           "point_scale = 2.0, uniform bool turbulence = false) varying;",
+}
+
+
 @cache
 def functions_module_text() -> str:
     from render.library.functions import FUNCTIONS
@@ -224,7 +234,7 @@ def functions_module_text() -> str:
     for name, f in FUNCTIONS.items():
         if "::" in name:
             continue  # state:: is the standard module
-        out.append(_declare(name, f, "::functions", "varying"))
+        out.append(_DECLARED.get(name) or _declare(name, f, "::functions", "varying"))
     return "\n".join(out) + "\n"
 
 
