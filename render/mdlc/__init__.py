@@ -203,3 +203,33 @@ def material_from_call(call: str, module: str | None = None, *, base_dir=None, m
     except MaterialInstanceError as e:
         raise MdlError([e.diagnostic()]) from None
     return value, info
+
+
+def run_function(module, name: str, state, *args, index: int = 0):
+    """Run MDL function ``name`` of checked ``module`` on the lanes of ``state``.
+
+    ``args`` are Python values (uniform: numbers, tuples, dicts for structs, lists for
+    arrays) or numpy arrays with one row per lane (varying).  Returns the lane value
+    (numpy; a tuple for a struct).  For tests and the Handbook check.
+    """
+    import numpy as np
+
+    from mdl import lanes as LN
+    from render.mdlc.compiler import module_code
+
+    overloads = module.functions(name)
+    if not overloads:
+        raise KeyError(f"{module.qname} has no function {name!r}")
+    o = overloads[index]
+    ns = module_code(module)
+    lanes = []
+    for p, a in zip(o.params, args, strict=False):
+        if isinstance(a, np.ndarray) and not isinstance(p.type, type(None)):
+            lanes.append(a if a.dtype != np.float32 else a.astype(np.float64))
+        elif hasattr(a, "__len__") and isinstance(a, tuple) and not a:
+            lanes.append(None)
+        else:
+            lanes.append(LN.from_python(a, p.type))
+    n = len(state)
+    with np.errstate(all="ignore"):
+        return ns[f"f_{o.mangled}"](state, n, *lanes)
