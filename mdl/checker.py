@@ -152,6 +152,8 @@ class Checker:
         self.declare_values()
         self.compute_reads_state()
         self.check_definitions()
+        if not self.errors:
+            self.check_recursion()
         m.diagnostics = sorted(self.warnings, key=self.order)
         if self.errors:
             raise MdlError(sorted(self.errors, key=self.order) + m.diagnostics)
@@ -236,7 +238,7 @@ class Checker:
 
     def resolve_module_path(self, parts: list[str], where) -> str | None:
         if not parts:
-            self.error("empty module name", where)
+            self.error("empty module name", where, "name a module: import ::name::*;")
             return None
         if parts[0] in (".", ".."):
             base = [p for p in self.m.qname.split("::") if p][:-1]
@@ -244,7 +246,8 @@ class Checker:
             while rest and rest[0] in (".", ".."):
                 if rest.pop(0) == "..":
                     if not base:
-                        self.error("'..' goes above the top of the module hierarchy", where)
+                        self.error("'..' goes above the top of the module hierarchy", where,
+                                   "use fewer '..' or an absolute name ::a::b")
                         return None
                     base.pop()
             return "::" + "::".join(base + rest)
@@ -551,7 +554,8 @@ class Checker:
         for e in ents:
             if isinstance(e, TypeEntity):
                 if e.type is None:
-                    self.poison(f"typedef '{name.text}' is used before it is defined", name)
+                    self.poison(f"typedef '{name.text}' is used before it is defined", name,
+                                "move the typedef above its first use")
                 return e.type
         if ents:
             self.poison(f"'{name.text}' is not a type", name,
@@ -672,7 +676,8 @@ class Checker:
                 except _Poison:
                     continue
                 if info.const is None:
-                    self.warning("annotation arguments must be constants (ignored)", arg)
+                    self.warning("annotation arguments must be constants (ignored)", arg,
+                                 "write a literal or a constant")
                     continue
                 values.append(LN.to_python(info.const, info.type))
             qn = decls[0].qname.removeprefix("::")
@@ -705,6 +710,57 @@ class Checker:
                             break
         finally:
             self.final = True
+
+    def check_recursion(self) -> None:
+        """MDL has no recursion: a definition may not call itself, directly or through
+        others of its module (modules cannot import each other in a cycle)."""
+        own = [o for o in self.m.overloads if o.kind == "mdl" and o.decl is not None]
+        edges: dict = {}
+        for o in own:
+            sites = []
+            stack = [o.decl]
+            while stack:
+                x = stack.pop()
+                info = self.m.info.get(id(x)) if isinstance(x, A.Call) else None
+                if info is not None and info.call is not None and \
+                        info.call.kind == "overload" and info.call.target.module is self.m \
+                        and info.call.target.kind == "mdl":
+                    sites.append((info.call.target, x))
+                if isinstance(x, (A.Node, tuple)):
+                    items = x if isinstance(x, tuple) else [getattr(x, f) for f in
+                                                            x.__dataclass_fields__]
+                    stack.extend(v for v in items if isinstance(v, (A.Node, tuple)))
+            edges[o] = sorted(sites, key=lambda s: s[1].span.start)
+        reported = set()
+        for o in own:
+            path = self._cycle(o, edges)
+            if path is None or frozenset(map(id, path)) in reported:
+                continue
+            reported.add(frozenset(map(id, path)))
+            site = next(x for t, x in edges[o] if t is path[1 % len(path)] or
+                        (len(path) == 1 and t is o))
+            names = " -> ".join(p.name for p in (*path, o))
+            how = "calls itself" if len(path) == 1 else f"calls itself through {names}"
+            self.error(f"recursion: '{o.name}' {how}; MDL does not allow recursive calls",
+                       site, "rewrite it with a loop (for, while) and local variables")
+
+    @staticmethod
+    def _cycle(start, edges):
+        """The shortest call path start -> ... -> start, as the list of its overloads
+        (beginning with start), or None."""
+        from collections import deque
+
+        queue = deque([(start, [start])])
+        seen = set()
+        while queue:
+            o, path = queue.popleft()
+            for t, _ in edges.get(o, ()):
+                if t is start:
+                    return path
+                if id(t) not in seen:
+                    seen.add(id(t))
+                    queue.append((t, path + [t]))
+        return None
 
     def called_names(self, node) -> list[A.Name]:
         out = []
@@ -942,7 +998,8 @@ class Checker:
         if isinstance(info.type, T.Scalar) or isinstance(info.type, T.EnumType):
             self.poison(f"a condition must be a bool, got {_a(info.type)}", e,
                         "compare it: (x != 0)")
-        self.poison(f"a condition must be a bool, got {_a(info.type)}", e)
+        self.poison(f"a condition must be a bool, got {_a(info.type)}", e,
+                    "write a comparison (a == b, a < b...) or a bool value")
 
     def loop(self, s, cond, body, update=None) -> None:
         key = id(s)
@@ -971,7 +1028,7 @@ class Checker:
         info = self.expr(s.value)
         if not (info.type == T.INT or isinstance(info.type, (T.EnumType, T.ErrorType))):
             self.poison(f"a switch value must be an int or an enum, got {_a(info.type)}",
-                        s.value)
+                        s.value, "switch on an int (int(x)) or an enum, or use if/else")
         varying = info.level > UNIFORM
         seen = {}
         defaults = 0
@@ -1005,7 +1062,8 @@ class Checker:
         o = self.fn
         self.fn_ctx["returns"] += 1
         if self.material_body or o is None:
-            self.poison("'return' outside of a function", s)
+            self.poison("'return' outside of a function", s,
+                        "a material's body is one expression: use let { ... } in ...")
         info = self.expr(s.value)
         self.assign_check(o.ret, info, s.value, f"the return value of '{o.name}'")
         if o.ret_uniform and info.level == VARYING:
@@ -1044,7 +1102,8 @@ class Checker:
                             vt = init_info.type if init_info.type.elem == t.elem else t
                     self.assign_check(vt, init_info, dc.init, f"'{dc.name}'")
                 elif d.const:
-                    self.poison(f"constant '{dc.name}' has no value", dc.name_span)
+                    self.poison(f"constant '{dc.name}' has no value", dc.name_span,
+                                f"write const ... {dc.name} = value;")
                 elif isinstance(t, T.AutoType):
                     self.poison(f"'auto {dc.name}' needs an initializer", dc.name_span,
                                 f"write auto {dc.name} = value;")
@@ -1130,7 +1189,8 @@ class Checker:
     def _expr(self, e) -> ExprInfo:
         method = getattr(self, "e_" + type(e).__name__, None)
         if method is None:
-            self.poison(f"unsupported expression {type(e).__name__}", e)
+            self.poison(f"unsupported expression {type(e).__name__}", e,
+                        "rewrite it with calls, operators and variables")
         return method(e)
 
     def e_Literal(self, e: A.Literal) -> ExprInfo:
@@ -1161,7 +1221,8 @@ class Checker:
         ent = ents[0]
         if isinstance(ent, Local):
             if ent.type is None:
-                self.poison(f"'{ent.name}' is used in its own initializer", e)
+                self.poison(f"'{ent.name}' is used in its own initializer", e,
+                            "give it a value that does not use itself")
             return ExprInfo(ent.type, ent.level, ent.value, target=ent,
                             lvalue=not ent.const and not (ent.is_param and False))
         if isinstance(ent, SizeName):
@@ -1182,8 +1243,10 @@ class Checker:
             self.poison(f"'{name.text}' is {what}; it must be called", e,
                         f"write {name.text}(...) with its arguments")
         if isinstance(ent, AnnotationEntity):
-            self.poison(f"'{name.text}' is an annotation", e)
-        self.poison(f"'{name.text}' cannot be used here", e)
+            self.poison(f"'{name.text}' is an annotation", e,
+                        "annotations go in [[ ... ]] after a declaration")
+        self.poison(f"'{name.text}' cannot be used here", e,
+                    "use a value, a constant or a call here")
 
     def e_Sequence(self, e: A.Sequence) -> ExprInfo:
         last = None
@@ -1253,7 +1316,8 @@ class Checker:
             rt, lt, vt = self.binary_type(op, target.type, value.type, e)
             if rt != target.type and T.implicit_cost(rt, target.type) is None:
                 self.poison(f"'{e.op}' gives {_a(rt)}, which cannot be stored in "
-                            f"{_a(target.type)}", e)
+                            f"{_a(target.type)}", e,
+                            f"write it out: x = {target.type}(x {op} ...)")
             value.convert = vt if vt != value.type else None
             ops = (lt, vt, rt)
             level = max(target.level, value.level)
@@ -1275,13 +1339,14 @@ class Checker:
             self.poison("the left side of an assignment is not assignable", e,
                         "assign to a variable, a field, a component or an element")
         if root.const:
-            self.poison(f"'{root.name}' is a constant and cannot be assigned", e)
+            self.poison(f"'{root.name}' is a constant and cannot be assigned", e,
+                        "copy it into a variable first")
         if isinstance(e, A.Member):
             oi = self.m.info.get(id(e.obj))
             if oi is not None and isinstance(oi.type, T.Vector) and len(e.name) > 1 and \
                     len(set(e.name)) != len(e.name):
                 self.poison(f"swizzle '.{e.name}' repeats a component and cannot be assigned",
-                            e)
+                            e, "assign each component once")
 
     def assigned(self, target, level: int, where) -> None:
         root = self.root_local(target)
@@ -1310,7 +1375,8 @@ class Checker:
         if e.op in ("++", "--"):
             self.check_lvalue(e.operand, a)
             if not T.is_numeric(t) or isinstance(t, (T.Matrix, T.Color)):
-                self.poison(f"'{e.op}' needs a number, got {_a(t)}", e)
+                self.poison(f"'{e.op}' needs a number, got {_a(t)}", e,
+                            "use it on an int, float or double variable")
             self.assigned(e.operand, a.level, e)
             return ExprInfo(t, a.level, None)
         if e.op in ("-", "+"):
@@ -1331,15 +1397,16 @@ class Checker:
             return ExprInfo(t, a.level, None if a.const is None else LN.lnot(a.const))
         if e.op == "~":
             if T.elem_kind(t) != "int" or isinstance(t, T.Matrix):
-                self.poison(f"'~' needs an int, got {_a(t)}", e)
+                self.poison(f"'~' needs an int, got {_a(t)}", e, "convert it: ~int(x)")
             return ExprInfo(t, a.level, None if a.const is None else LN.bnot(a.const))
-        self.poison(f"unknown operator '{e.op}'", e)
+        self.poison(f"unknown operator '{e.op}'", e, "use -, +, ! or ~")
 
     def e_Postfix(self, e: A.Postfix) -> ExprInfo:
         a = self.expr(e.operand)
         self.check_lvalue(e.operand, a)
         if not T.is_numeric(a.type) or isinstance(a.type, (T.Matrix, T.Color)):
-            self.poison(f"'{e.op}' needs a number, got {_a(a.type)}", e)
+            self.poison(f"'{e.op}' needs a number, got {_a(a.type)}", e,
+                        "use it on an int, float or double variable")
         self.assigned(e.operand, a.level, e)
         return ExprInfo(a.type, a.level, None)
 
@@ -1434,12 +1501,12 @@ class Checker:
             if isinstance(b, T.Vector):
                 return T.Vector(k, b.size), T.Scalar(k), T.Vector(k, b.size)
             return T.Scalar(k), T.Scalar(k), T.Scalar(k)
-        self.poison(bad, e)
+        self.poison(bad, e, _OPERANDS_FIX)
 
     def int_op(self, op, a, b, e, bad):
         if T.elem_kind(a) == "int" and T.elem_kind(b) == "int" and not isinstance(a, T.Matrix):
             if isinstance(a, T.Vector) and isinstance(b, T.Vector) and a.size != b.size:
-                self.poison(bad, e)
+                self.poison(bad, e, _OPERANDS_FIX)
             return (a if isinstance(a, T.Vector) else b), a, b
         self.poison(bad, e, f"'{op}' applies to ints" + (
             " (use math::fmod for floats)" if op == "%" else ""))
@@ -1455,30 +1522,33 @@ class Checker:
             if op == "*":
                 if a.cols != b.rows:
                     self.poison(f"cannot multiply {a} by {b}: {a} has {a.cols} columns, {b} "
-                                f"has {b.rows} rows", e)
+                                f"has {b.rows} rows", e,
+                                "the left matrix needs as many columns as the right has rows")
                 return (T.Matrix(k, b.cols, a.rows), T.Matrix(k, a.cols, a.rows),
                         T.Matrix(k, b.cols, b.rows))
-            self.poison(bad, e)
+            self.poison(bad, e, _OPERANDS_FIX)
         m, other = (a, b) if isinstance(a, T.Matrix) else (b, a)
         if isinstance(other, T.Scalar) and other.kind != "bool":
             k = T.common_scalar(m.elem, other.kind)
             mt = T.Matrix(k, m.cols, m.rows)
             if op == "/" and other is a:
-                self.poison(bad, e)
+                self.poison(bad, e, _OPERANDS_FIX)
             return (mt, mt, T.Scalar(k)) if isinstance(a, T.Matrix) else (mt, T.Scalar(k), mt)
         if isinstance(other, T.Vector) and op == "*":
             k = T.common_scalar(m.elem, other.elem)
             if isinstance(a, T.Matrix):  # m * v: v has m.cols components
                 if other.size != m.cols:
                     self.poison(f"cannot multiply {m} by {other}: it needs a vector of "
-                                f"{m.cols} components", e)
+                                f"{m.cols} components", e,
+                                f"use a float{m.cols}, or multiply from the other side")
                 return (T.Vector(k, m.rows), T.Matrix(k, m.cols, m.rows),
                         T.Vector(k, other.size))
             if other.size != m.rows:  # v * m: v has m.rows components
                 self.poison(f"cannot multiply {other} by {m}: it needs a vector of {m.rows} "
-                            "components", e)
+                            "components", e,
+                            f"use a float{m.rows}, or multiply from the other side")
             return (T.Vector(k, m.cols), T.Vector(k, other.size), T.Matrix(k, m.cols, m.rows))
-        self.poison(bad, e)
+        self.poison(bad, e, _OPERANDS_FIX)
 
     def e_Member(self, e: A.Member) -> ExprInfo:
         a = self.expr(e.obj)
@@ -1513,7 +1583,8 @@ class Checker:
         if isinstance(t, T.Color):
             self.poison(f"a color has no component '{e.name}'", e.name_span,
                         "convert it: float3(c).x, or use math::average / math::luminance")
-        self.poison(f"{_a(t)} has no member '{e.name}'", e.name_span)
+        self.poison(f"{_a(t)} has no member '{e.name}'", e.name_span,
+                    "only structs have fields and vectors components (.x .y .z .w)")
 
     def e_Index(self, e: A.Index) -> ExprInfo:
         a = self.expr(e.obj)
@@ -1537,12 +1608,14 @@ class Checker:
         elif isinstance(t, T.Color):
             self.poison("a color cannot be indexed", e, "convert it: float3(c)[0]")
         else:
-            self.poison(f"{_a(t)} cannot be indexed", e)
+            self.poison(f"{_a(t)} cannot be indexed", e,
+                        "index arrays, vectors and matrices only")
         const = None
         if i.const is not None:
             k = int(LN.uniform_value(i.const))
             if n is not None and not 0 <= k < n:
-                self.poison(f"index {k} is out of range for {t} (0 to {n - 1})", e.index)
+                self.poison(f"index {k} is out of range for {t} (0 to {n - 1})", e.index,
+                            f"use an index from 0 to {n - 1}")
             if a.const is not None:
                 const = LN.index(a.const, np.array([k]))
         return ExprInfo(rt, max(a.level, i.level), const)
@@ -1564,8 +1637,8 @@ class Checker:
         return ExprInfo(t, a.level, a.const if not isinstance(a.const, tuple) else a.const)
 
     def e_ArrayType(self, e: A.ArrayType) -> ExprInfo:
-        self.poison(f"'{e.element.text}[...]' is an array type; construct a value: "
-                    f"{e.element.text}[](...)", e)
+        self.poison(f"'{e.element.text}[...]' is an array type, not a value", e,
+                    f"construct a value: {e.element.text}[](...)")
 
     # ------------------------------------------------------------------ calls
     def e_Call(self, e: A.Call) -> ExprInfo:
@@ -1602,11 +1675,14 @@ class Checker:
             if t is not None and T.builtin(str(t)) is not None:
                 return self.builtin_ctor(e, t)
             if isinstance(t, T.ArrayT):
-                self.poison("construct arrays with T[](...)", callee)
-            self.poison(f"'{name.text}' cannot be constructed", callee)
+                self.poison("an array type is not called like a function", callee,
+                            "construct arrays with T[](...)")
+            self.poison(f"'{name.text}' cannot be constructed", callee,
+                        "call a function, or construct a struct, vector, matrix or color")
         overloads = [x for x in ents if isinstance(x, Overload)]
         if not overloads:
-            self.poison(f"'{name.text}' is not a function", callee)
+            self.poison(f"'{name.text}' is not a function", callee,
+                        f"use it without '(...)', or call a function")
         return self.resolve_call(e, overloads, name.text)
 
     def is_callable_name(self, n: str) -> bool:
@@ -1891,11 +1967,13 @@ class Checker:
             if n == 0:
                 return self.ctor_info(t, "scalar", [], level)
             if n != 1:
-                self.poison(f"{name}(...) takes one value, got {n}", e)
+                self.poison(f"{name}(...) takes one value, got {n}", e,
+                            f"write {name}(x)")
             s = infos[0].type
             if isinstance(t, T.String):
                 if s != T.STRING:
-                    self.poison(f"string(...) takes a string, got {_a(s)}", args[0])
+                    self.poison(f"string(...) takes a string, got {_a(s)}", args[0],
+                                "MDL does not convert numbers to strings; write a literal")
                 return self.ctor_info(t, "scalar", args, level, infos)
             if not (isinstance(s, (T.Scalar, T.EnumType))):
                 self.poison(f"{name}(...) takes a number or a bool, got {_a(s)}", args[0],
@@ -1914,7 +1992,8 @@ class Checker:
                 if T.width(s) == size and isinstance(s, (T.Vector, T.Color)):
                     return self.ctor_info(t, kind, args, level, infos)
                 if isinstance(t, T.Color) and isinstance(s, T.ArrayT):
-                    self.poison("color(wavelengths, amplitudes) needs two arrays", e)
+                    self.poison("color(wavelengths, amplitudes) needs two arrays", e,
+                                "write color(float[](...), float[](...))")
                 self.poison(f"cannot make {_a(name)} from {_a(s)}", args[0],
                             f"{name}(...) takes 1 or {size} numbers, or a vector of {size}")
             if isinstance(t, T.Color) and n == 2 and all(isinstance(i.type, T.ArrayT)
@@ -1926,7 +2005,8 @@ class Checker:
                             if kind == "vector" else "write color(x) or color(r, g, b)")
             for a, i in zip(args, infos, strict=True):
                 if not isinstance(i.type, (T.Scalar, T.EnumType)) or i.type == T.STRING:
-                    self.poison(f"{name}(...) components must be numbers, got {_a(i.type)}", a)
+                    self.poison(f"{name}(...) components must be numbers, got {_a(i.type)}", a,
+                                "pass numbers, or one vector of the right size")
             return self.ctor_info(t, kind, args, level, infos)
         if isinstance(t, T.Matrix):
             if n == 0:
@@ -1942,8 +2022,10 @@ class Checker:
             if n == t.cols * t.rows and all(isinstance(i.type, T.Scalar) for i in infos):
                 return self.ctor_info(t, "matrix", args, level, infos)
             self.poison(f"{name}(...) takes 1 value, {t.cols} columns of {t.rows} or "
-                        f"{t.cols * t.rows} values, got {n}", e)
-        self.poison(f"{name} cannot be constructed here", e)
+                        f"{t.cols * t.rows} values, got {n}", e,
+                        f"write {name}(x) for a diagonal, or all {t.cols * t.rows} values")
+        self.poison(f"{name} cannot be constructed here", e,
+                    "construct numbers, vectors, matrices, colors, structs or arrays")
 
     def ctor_info(self, t, kind, args, level, infos=()) -> ExprInfo:
         const = None
@@ -1963,7 +2045,8 @@ class Checker:
         for k, a in enumerate(e.args):
             j = k if a.name is None else (params.index(a.name) if a.name in params else -1)
             if j < 0 or j >= len(params):
-                self.poison(f"{t}(...) takes ({', '.join(params)})", a)
+                self.poison(f"{t}(...) takes ({', '.join(params)})", a,
+                            f"pass at most {len(params)} arguments, by position or name")
             slots[j] = k
         ni = infos[slots[0]] if slots[0] is not None else None
         if ni is None or ni.type != T.STRING:
@@ -1981,7 +2064,8 @@ class Checker:
                             f"{_a(gi.type)}", e.args[slots[1]].value,
                             "tex::gamma_default, tex::gamma_linear or tex::gamma_srgb")
             if gi.const is None:
-                self.poison("the gamma must be a constant", e.args[slots[1]].value)
+                self.poison("the gamma must be a constant", e.args[slots[1]].value,
+                            "tex::gamma_default, tex::gamma_linear or tex::gamma_srgb")
             gamma = e.args[slots[1]].value
         return ExprInfo(t, UNIFORM, None, call=CallInfo(
             "resource", None, t, [e.args[slots[0]].value, gamma]))
@@ -1997,11 +2081,12 @@ class Checker:
     def array_ctor(self, e: A.Call, callee: A.ArrayType) -> ExprInfo:
         elem = self.lookup_type(callee.element)
         if isinstance(elem, T.ArrayT):
-            self.poison("arrays of arrays are not allowed in MDL", callee)
+            self.poison("arrays of arrays are not allowed in MDL", callee,
+                        "use an array of structs that hold arrays")
         size = None
         suf = callee.suffix
         if suf.deferred is not None:
-            self.poison("T[<N>](...) is not a value; write T[](...) or T[N](...)", suf)
+            self.poison("T[<N>](...) is not a value", suf, "write T[](...) or T[N](...)")
         size_node = None
         if suf.size is not None:
             si = self.expr(suf.size)
@@ -2095,10 +2180,15 @@ class Checker:
         if isinstance(info.type, T.ErrorType):
             raise _Poison()
         if not (info.type == T.INT or isinstance(info.type, T.EnumType)):
-            self.poison(f"{what} must be an int, got {_a(info.type)}", e)
+            self.poison(f"{what} must be an int, got {_a(info.type)}", e,
+                        "use an int constant")
         if info.const is None:
             self.poison(f"{what} must be a constant", e, "use a literal or a constant")
         return int(LN.uniform_value(info.const))
+
+
+_OPERANDS_FIX = ("convert an operand so both have matching types: float(i), float3(x), "
+                 "color(v)...")
 
 
 class _Partial:

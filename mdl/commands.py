@@ -26,7 +26,7 @@ from mdl.types import EnumType, StructType
 
 __all__ = ["register", "backends", "EXIT_OK", "EXIT_ERRORS", "EXIT_USAGE", "EXIT_IO"]
 
-EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_IO = 0, 1, 2, 3
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_IO, EXIT_INTERNAL = 0, 1, 2, 3, 70
 
 _EPILOG = """\
 examples:
@@ -112,6 +112,9 @@ def cmd_check(args) -> int:
                 print(d.format(), file=sys.stderr)
             failed = True
             continue
+        except Exception as e:  # noqa: BLE001 - a bug: say so, in one line
+            print(internal_error(f, e), file=sys.stderr)
+            return EXIT_INTERNAL
         for d in module.diagnostics:
             print(d.format(), file=sys.stderr)
         if args.strict and module.diagnostics:
@@ -147,12 +150,26 @@ def cmd_info(args) -> int:
         for d in e.diagnostics:
             print(d.format(), file=sys.stderr)
         return EXIT_ERRORS
+    except Exception as e:  # noqa: BLE001 - a bug: say so, in one line
+        print(internal_error(name, e), file=sys.stderr)
+        return EXIT_INTERNAL
     print(describe(module))
     if args.python:
         for b in found:
             if hasattr(b, "python"):
                 print(b.python(module))
     return EXIT_OK
+
+
+def internal_error(what: str, e: Exception) -> str:
+    """One line for an unexpected exception (a bug in the front end or a back end): where
+    it was raised, and what to do."""
+    import traceback
+
+    frames = traceback.extract_tb(e.__traceback__)
+    where = f" at {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else ""
+    return (f"pwc mdl: internal error while reading {what}: {type(e).__name__}: {e}{where} "
+            "(a bug of the workbench, not of the module: please report it with the module)")
 
 
 def _annos(annos, indent: str) -> list[str]:
@@ -169,10 +186,11 @@ def describe(module) -> str:
     if imports:
         out.append("  imports: " + ", ".join(imports))
     exports = module.exports()
-    mats, funcs, types, consts, values = [], [], [], [], []
+    mats, funcs, types, consts, values, again = [], [], [], [], [], []
     for n in sorted(exports):
         for e in exports[n]:
             if e.module is not module:
+                again.append((n, e))
                 continue
             if isinstance(e, Overload):
                 if e.kind == "struct":
@@ -194,6 +212,12 @@ def describe(module) -> str:
             for p in o.params:
                 if p.annotations:
                     out.append(f"        {p.name}: " + ", ".join(str(a) for a in p.annotations))
+    if again:
+        out.append("  re-exported:")
+        for n, e in again:
+            what = e.signature() if isinstance(e, Overload) else (
+                f"{e.type} {n}" if isinstance(e, ConstEntity) else n)
+            out.append(f"    {what}  (from {e.module.qname})")
     if types:
         out.append("  types:")
         for e in types:

@@ -67,7 +67,21 @@ class AnnotationValue:
     span: Span | None = None
 
     def __str__(self) -> str:
-        return f"{self.name}({', '.join(repr(a) for a in self.args)})"
+        return f"{self.name}({', '.join(_literal(a) for a in self.args)})"
+
+
+def _literal(v) -> str:
+    """A Python value as MDL writes it (annotation arguments)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        body = v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+        return f'"{body}"'
+    if isinstance(v, float):
+        return repr(v) if v != int(v) or abs(v) >= 1e16 else f"{v:.1f}"
+    if isinstance(v, (tuple, list)):
+        return "(" + ", ".join(_literal(x) for x in v) + ")"
+    return repr(v)
 
 
 @dataclass(eq=False)

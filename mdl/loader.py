@@ -198,9 +198,25 @@ class Loader:
             return self.modules[mt.qname]
         return self.check(mt)
 
+    def reserved(self, qname: str) -> bool:
+        """Whether ``qname`` is a standard module's or a provider's fixed name (a file
+        cannot be that module)."""
+        name = qname.removeprefix("::")
+        return ("::" not in name and name in stdlib.STANDARD_MODULES) or any(
+            qname in getattr(p, "fixed", lambda: ())() for p in self.providers)
+
     def check(self, mt: ModuleText, register: bool = True) -> CheckedModule:
         from mdl.checker import check_module
 
+        if mt.kind == "file" and mt.path is not None and self.reserved(mt.qname):
+            src = Source(mt.filename, mt.text)
+            stem = mt.qname.removeprefix("::")
+            owner = ("a standard module" if stem in stdlib.STANDARD_MODULES
+                     else "the renderer's")
+            raise MdlError([src.diagnostic(
+                "error", f"this file would be the module {mt.qname}, which is "
+                f"{owner} and cannot be replaced", 0, min(len(mt.text), 1) or None,
+                f"rename the file (my_{stem}.mdl) and import it by that name")])
         self._loading.append(mt.qname)
         try:
             module = check_module(self, mt, cacheable=register)

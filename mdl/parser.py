@@ -642,7 +642,8 @@ class _Parser:
             elif self.accept("default"):
                 label = None
             elif self.at("eof"):
-                self.fail("missing '}' at the end of the switch")
+                self.fail("missing '}' at the end of the switch",
+                          fix="add '}' to close the switch's '{'")
             else:
                 self.fail(f"expected 'case' or 'default', found {self.describe(self.tok)}",
                           fix="statements of a switch follow a 'case VALUE:' label")
@@ -650,7 +651,8 @@ class _Parser:
             stmts = []
             while not self.at("case", "default", "}"):
                 if self.at("eof"):
-                    self.fail("missing '}' at the end of the switch")
+                    self.fail("missing '}' at the end of the switch",
+                              fix="add '}' to close the switch's '{'")
                 stmts.append(self.statement())
             cases.append(A.Case(self.span_from(cstart), label, tuple(stmts)))
         self.advance()

@@ -43,7 +43,10 @@ by name (:mod:`render.expr`); as a table, ``call`` into the exports of ``module`
 
 Light types: ``point`` (position, intensity), ``spot`` (position, direction or look_at,
 intensity, cutoff_angle, beam_width), ``directional`` (direction, irradiance),
-``environment`` (radiance, or file = lat-long EXR with scale and rotation),
+``environment`` (radiance, or file = lat-long EXR with scale and rotation, or function =
+an MDL call of a colour function of ``state::direction()`` such as
+``base::sun_and_sky(...)``, optionally into ``module``, baked at ``resolution``:
+:mod:`render.mdlc.environment`),
 ``sun_and_sky`` (sun_direction, or elevation and azimuth in degrees; turbidity,
 intensity, sun_radius, sun_scale, sky_scale, ground_albedo: :class:`render.sky.SunAndSky`),
 ``quad`` (center, normal, size, up, radiance or intensity) and ``sphere`` (center,
@@ -907,8 +910,14 @@ def parse_scene(
     return _Parser(data, loc, path, base_dir, profile_dirs, mdl_paths).scene(overrides or {})
 
 
-_CALL_KEY = re.compile(r"\bcall\s*=")
-_CALL_VALUE = re.compile(r"""\bcall\s*=\s*('''|\"\"\"|'|")""")
+def _key_re(key: str):
+    """``key =`` in a TOML line."""
+    return re.compile(rf"\b{key}\s*=")
+
+
+def _value_re(key: str):
+    """``key = `` up to the opening quote of its string value (group 1: the quote)."""
+    return re.compile(rf"""\b{key}\s*=\s*('''|\"\"\"|'|")""")
 
 
 class _Parser:
@@ -1300,15 +1309,17 @@ class _Parser:
                              "material", self.path, line, col)
         return value
 
-    def _call_position(self, section: str, i: int) -> tuple[int, int]:
-        """(line, column) of the first character of the ``call`` string's value."""
-        line, _ = self.loc.key(section, i, "call")
-        if not line or not _CALL_KEY.search(self.loc.lines[line - 1]):
+    def _call_position(self, section: str, i: int, key: str = "call") -> tuple[int, int]:
+        """(line, column) of the first character of the ``call`` (or ``key``) string's
+        value."""
+        key_re, value_re = _key_re(key), _value_re(key)
+        line, _ = self.loc.key(section, i, key)
+        if key == "call" and (not line or not key_re.search(self.loc.lines[line - 1])):
             line, _ = self.loc.key(section, i, "material")
         if not line:
             return 0, 0
         start = self.loc.line_start[line - 1]
-        m = _CALL_VALUE.search(self.loc.text, start)
+        m = value_re.search(self.loc.text, start)
         if not m:
             return line, 0
         pos = m.end()
@@ -1435,7 +1446,14 @@ class _Parser:
                     self._color(t, "irradiance", sec, i, np.ones(3)),
                 ), None
             if kind == "environment":
-                self._check_keys(t, common | {"radiance", "file", "scale", "rotation"}, sec, i)
+                self._check_keys(t, common | {"radiance", "file", "scale", "rotation", "function",
+                                              "module", "resolution"}, sec, i)
+                given = [k for k in ("radiance", "file", "function") if k in t]
+                if len(given) > 1:
+                    raise self.error(f"lights[{i}]: give one of radiance, file or function, "
+                                     f"not {' and '.join(given)}", sec, i, given[1])
+                if "function" in t:
+                    return self.environment_function(t, i), None
                 if "file" in t:
                     from displacement.textures import read_texture
 
@@ -1511,6 +1529,40 @@ class _Parser:
         except ValueError as e:
             raise self.error(f"lights[{i}]: {e}", sec, i) from None
 
+
+    def environment_function(self, t: dict, i: int):
+        """``type = "environment", function = "base::sun_and_sky(...)"``: an MDL colour
+        function of ``state::direction()`` (:func:`render.mdlc.environment_from_call`)."""
+        from mdl.diagnostics import MdlError
+        from render.mdlc.environment import environment_from_call
+
+        sec = "lights"
+        for key in ("function", "module"):
+            if key in t and (not isinstance(t[key], str) or not t[key].strip()):
+                raise self.error(f"lights[{i}]: {key} must be a non-empty string", sec, i, key)
+        resolution = t.get("resolution", [256, 512])
+        if not (isinstance(resolution, list) and len(resolution) == 2 and all(
+                isinstance(x, int) and not isinstance(x, bool) and 2 <= x <= 8192
+                for x in resolution)):
+            raise self.error(f"lights[{i}]: resolution must be [rows, columns], integers in "
+                             f"[2, 8192], got {resolution!r}", sec, i, "resolution")
+        line, col = self._call_position(sec, i, "function")
+        try:
+            light = environment_from_call(
+                t["function"], t.get("module"), base_dir=self.base_dir,
+                mdl_paths=self.mdl_paths, resolution=resolution, source_name=self.path,
+                line=line or 1, col=col or 1)
+        except MdlError as e:
+            d = e.first
+            msg = d.message + (f" ({d.fix})" if d.fix else "")
+            if d.loc.file == self.path:
+                raise SceneError(f"lights[{i}]: function: {msg}", self.path, d.loc.line,
+                                 d.loc.col) from None
+            raise SceneError(f"lights[{i}]: function: in {d.loc}: {msg}", self.path, line,
+                             col) from None
+        except ValueError as e:
+            raise self.error(f"lights[{i}]: function: {e}", sec, i, "function") from None
+        return light
 
     def sun_and_sky(self, t: dict, i: int):
         from render.sky import SunAndSky, sun_direction_from_angles

@@ -51,6 +51,7 @@ import ::geometry::*;
 import ::perlin_noise::*;
 import ::diffuse_reflection::*;
 import ::pwc_examples::*;
+import ::base::*;
 using ::materials import *;
 using ::functions import *;
 using ::df import *;

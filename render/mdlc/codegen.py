@@ -179,7 +179,8 @@ class _FunctionGen:
     def info(self, e) -> ExprInfo:
         i = self.module.info.get(id(e))
         if i is None:
-            raise CodegenError("internal: expression was not checked", e)
+            raise CodegenError("internal: expression was not checked", e,
+                               "a bug of the workbench: please report it with the module")
         return i
 
     def local_name(self, loc: Local) -> str:
@@ -615,7 +616,8 @@ class _FunctionGen:
         root = self.info(node).target
         var = self.local_name(root) if isinstance(root, Local) else None
         if var is None:
-            raise CodegenError("cannot assign to this expression", target)
+            raise CodegenError("cannot assign to this expression", target,
+                               "assign to a variable, a field, a component or an element")
         if not path:
             self.emit(f"{var} = {value}" if m is None else f"{var} = LN.sel({m}, {value}, {var})")
             return var
@@ -720,12 +722,14 @@ class _FunctionGen:
             return f"n_{t.var.name}"
         if isinstance(t, ConstEntity):
             if t.value is None:
-                raise CodegenError(f"constant '{t.name}' has no value", e)
+                raise CodegenError(f"constant '{t.name}' has no value", e,
+                                   "give the constant a value that folds")
             return self.mg.const(t.value) if _lane_type(t.type) or isinstance(
                 t.type, (T.ArrayT, T.StructType)) else repr(t.value)
         if isinstance(t, EnumValueEntity):
             return self.mg.const(LN.const(t.enum, t.value))
-        raise CodegenError(f"'{e.name.text}' cannot be used in a function", e)
+        raise CodegenError(f"'{e.name.text}' cannot be used in a function", e,
+                           "use a value, a constant or a call here")
 
     def e_Sequence(self, e, info) -> str:
         for x in e.items[:-1]:
@@ -872,13 +876,17 @@ class _FunctionGen:
             name_node, gamma_node = call.args
             if name_node is None:
                 return "None"
+            if str(call.type) != "texture_2d":
+                raise CodegenError(f"{call.type} resources are not supported by the workbench "
+                                   "(2D textures only)", e, "use a texture_2d")
             name = self.info(name_node).const
             gamma = None
             if gamma_node is not None:
                 gamma = LN.to_python(self.info(gamma_node).const, self.info(gamma_node).type)
             return self.mg.resource_ref(str(call.type), name, gamma)
         if kind == "df_default":
-            raise CodegenError("distribution functions exist only in materials", e)
+            raise CodegenError("distribution functions exist only in materials", e,
+                               "build the df in a material's expression")
         o: Overload = call.target
         args = self.arg_codes(call, o.params)
         zero = self.mg.zero_ref(info.type)
@@ -891,7 +899,7 @@ class _FunctionGen:
         if o.kind in ("mdl", "struct"):
             if o.is_material or _touches_material_level(o):
                 raise CodegenError(f"'{o.name}' works on materials and cannot be called in "
-                                   "a function", e)
+                                   "a function", e, "call it in a material's expression")
             f = self.mg.function_ref(o)
             if info.level == UNIFORM and not o.reads_state:
                 return f"{f}(S, 1{''.join(', ' + a for a in args)})"
@@ -899,7 +907,8 @@ class _FunctionGen:
             if m is None:
                 return f"{f}(S, L{''.join(', ' + a for a in args)})"
             return f"mcall({f}, {m}, S, L, {zero}{''.join(', ' + a for a in args)})"
-        raise CodegenError(f"cannot call '{o.name}' here", e)
+        raise CodegenError(f"cannot call '{o.name}' here", e,
+                           "call it in a material's expression")
 
     def intrinsic(self, o: Overload, args: list[str], e, info) -> str:
         mod = o.module.qname
@@ -919,7 +928,8 @@ class _FunctionGen:
                     name.removeprefix("lookup_")]
                 if str(o.params[0].type) != "texture_2d":
                     raise CodegenError(f"tex::{name} of a {o.params[0].type} is not supported "
-                                       "by the workbench (2D textures only)", e)
+                                       "by the workbench (2D textures only)", e,
+                                       "use a texture_2d")
                 fill = [a if a != "None" else d for a, d in zip(
                     args, ["None", "None", "1", "1", "(0.0, 1.0)", "(0.0, 1.0)", "0.0"],
                     strict=False)]
@@ -941,7 +951,8 @@ class _FunctionGen:
                 return f"SCENE.data_isvalid(S, L, {args[0]})"
             default = args[1] if args[1] != "None" else f"{self.mg.zero_ref(info.type)}(1)"
             return f"SCENE.lookup(S, L, {args[0]}, {default})"
-        raise CodegenError(f"{mod}::{name} is not implemented by the workbench", e)
+        raise CodegenError(f"{mod}::{name} is not implemented by the workbench", e,
+                           "see docs/mdl.md for what the workbench implements")
 
     def where(self, e) -> str:
         line, col = self.module.source.line_col(e.span.start)

@@ -41,6 +41,10 @@ from render.mdlc.natives import native_value
 __all__ = ["Const", "Vary", "MaterialInstanceError", "Instantiator", "to_core"]
 
 
+#: the fix for material parts built other than MDL allows
+_PARTS_FIX = "build material parts from constructor and material calls, let and ?: only"
+
+
 class MaterialInstanceError(ValueError):
     """A material cannot be built from these arguments; ``module`` and ``node`` locate
     the call in its MDL source."""
@@ -71,12 +75,23 @@ class Vary:
     state's lanes, ``core`` the callable the render core evaluates (a
     :class:`render.material.Varying`, or a library function's own result)."""
 
-    def __init__(self, type_: T.Type, lanes, core=None, name: str = ""):
+    def __init__(self, type_: T.Type, lanes, core=None, name: str = "", knots=None):
         self.type = type_
         self._lanes = lanes
         self.name = name
+        self._knots = knots  # (knots_u, knots_v), or a function giving them (lazily)
         self._cache = threading.local()
         self.core = core if core is not None else self._make_core()
+
+    @property
+    def knots(self) -> tuple:
+        """``(knots_u, knots_v)`` of the value as a displacement (:mod:`render.mdlc.knots`);
+        a library function's own field keeps its ``uv_knots``."""
+        if callable(self._knots):
+            self._knots = self._knots()
+        if self._knots is None:
+            self._knots = getattr(self.core, "uv_knots", None) or (None, None)
+        return self._knots
 
     def lanes(self, S):
         c = self._cache
@@ -102,11 +117,11 @@ class Vary:
         return Varying(function, self.name or "mdl")
 
     def __reduce__(self):
-        return (_rebuild_vary, (self.type, self._lanes, self.core, self.name))
+        return (_rebuild_vary, (self.type, self._lanes, self.core, self.name, self.knots))
 
 
-def _rebuild_vary(t, lanes, core, name):
-    return Vary(t, lanes, core, name)
+def _rebuild_vary(t, lanes, core, name, knots=None):
+    return Vary(t, lanes, core, name, knots)
 
 
 def to_core(v, t: T.Type):
@@ -162,7 +177,8 @@ class Instantiator:
             return self.struct(o, args, module, node)
         if o.kind == "mdl":
             return self.mdl_material(o, args, module, node)
-        raise MaterialInstanceError(f"'{o.name}' cannot be used in a material", module, node)
+        raise MaterialInstanceError(f"'{o.name}' cannot be used in a material", module, node,
+                                    "call a material, a df or a struct constructor here")
 
     def mdl_material(self, o: Overload, args: dict, module, node):
         m = o.module
@@ -176,7 +192,7 @@ class Instantiator:
                 v = self.eval(m, p.default, env, want=p.type)
             else:
                 raise MaterialInstanceError(f"{o.name} needs the argument '{p.name}'",
-                                            module, node)
+                                            module, node, f"add '{p.name}: value' to the call")
             if loc is not None:
                 env[id(loc)] = v
         return self.eval(m, d.body, env, want=o.ret)
@@ -198,12 +214,19 @@ class Instantiator:
                 from render.library.functions import FUNCTIONS
 
                 return FUNCTIONS[o.name](**kwargs)
+            if kind == "sky":
+                from render.mdlc.natives import SkyFunction, sun_and_sky_light
+
+                return SkyFunction(sun_and_sky_light(**kwargs))
         except MaterialInstanceError:
             raise
         except (ValueError, TypeError, LookupError) as e:
-            raise MaterialInstanceError(f"{o.name}(...): {e}", module, node) from None
+            raise MaterialInstanceError(
+                f"{o.name}(...): {e}", module, node,
+                f"change the value it names (pwc mdl info {o.module.qname} lists the "
+                "parameters)") from None
         raise MaterialInstanceError(f"'{o.name}' of {o.module.qname} has no implementation",
-                                    module, node)
+                                    module, node, "use another function of the module")
 
     def struct(self, o: Overload, args: dict, module, node):
         st: T.StructType = o.ret
@@ -221,17 +244,18 @@ class Instantiator:
                         isinstance(v, Vary) and not hasattr(core, "uv_knots"):
                     from displacement.fields import Field
 
-                    core = Field(core, (None, None), v.name or "mdl displacement")
+                    core = Field(core, v.knots, v.name or "mdl displacement")
                 kwargs[p.name] = core
             try:
                 return cls(**kwargs)
             except ValueError as e:
                 raise MaterialInstanceError(f"{st.qname.removeprefix('::')}(...): {e}",
-                                            module, node) from None
+                                            module, node, "change the value it names") from None
         if o.module.kind == "native":
             return self.native(o, args, module, node)
         raise MaterialInstanceError(f"struct {st.name} holds distribution functions; only "
-                                    "the workbench's df structs are supported", module, node)
+                                    "the workbench's df structs are supported", module, node,
+                                    "pass the distribution functions separately")
 
     # ------------------------------------------------------------------ evaluation
     def eval(self, m, e, env: dict, want: T.Type | None = None):
@@ -254,7 +278,8 @@ class Instantiator:
             return Const(LN.convert(v.value, src, dst), dst)
         if isinstance(v, Vary):
             inner = v
-            return Vary(dst, lambda S: LN.convert(inner.lanes(S), src, dst), None, v.name)
+            return Vary(dst, lambda S: LN.convert(inner.lanes(S), src, dst), None, v.name,
+                        lambda: inner.knots)
         return v
 
     def structural(self, m, e, env):
@@ -263,11 +288,13 @@ class Instantiator:
             tgt = info.target
             if isinstance(tgt, Local):
                 if id(tgt) not in env:
-                    raise MaterialInstanceError(f"'{tgt.name}' has no value here", m, e)
+                    raise MaterialInstanceError(f"'{tgt.name}' has no value here", m, e,
+                                                "give it a value before this use")
                 return env[id(tgt)]
             if isinstance(tgt, ConstEntity):
                 return Const(tgt.value, tgt.type)
-            raise MaterialInstanceError(f"'{e.name.text}' cannot be used here", m, e)
+            raise MaterialInstanceError(f"'{e.name.text}' cannot be used here", m, e,
+                                        "use a value, a constant or a call here")
         if isinstance(e, A.Literal):
             return Const(e.value, info.type)
         if isinstance(e, A.Call):
@@ -277,7 +304,8 @@ class Instantiator:
             try:
                 return self.wrap(getattr(obj, e.name), info.type)
             except AttributeError:
-                raise MaterialInstanceError(f"this value has no field '{e.name}'", m, e) from None
+                raise MaterialInstanceError(f"this value has no field '{e.name}'", m, e,
+                                            "use one of the struct's fields") from None
         if isinstance(e, A.Conditional):
             c = self.eval(m, e.cond, env)
             if not isinstance(c, Const):
@@ -303,7 +331,7 @@ class Instantiator:
             if isinstance(arr, (list, tuple)) and isinstance(i, Const):
                 return arr[int(LN.uniform_value(i.value))]
         raise MaterialInstanceError(f"this {type(e).__name__.lower()} cannot build a "
-                                    f"{info.type}", m, e)
+                                    f"{info.type}", m, e, _PARTS_FIX)
 
     def default_value(self, t: T.Type, m, node):
         if isinstance(t, T.DF):
@@ -327,7 +355,7 @@ class Instantiator:
         info = m.info[id(e)]
         call = info.call
         if call is None:
-            raise MaterialInstanceError("this value cannot be built here", m, e)
+            raise MaterialInstanceError("this value cannot be built here", m, e, _PARTS_FIX)
         if call.kind == "df_default":
             return None
         if call.kind == "resource":
@@ -351,7 +379,7 @@ class Instantiator:
             return [self.eval(m, a, env, want=elem) for a in call.args]
         if call.kind != "overload":
             raise MaterialInstanceError(f"a {call.kind} constructor cannot build a "
-                                        f"{info.type}", m, e)
+                                        f"{info.type}", m, e, _PARTS_FIX)
         o: Overload = call.target
         args = {}
         for p, a in zip(o.params, call.args, strict=True):
@@ -439,7 +467,9 @@ class Instantiator:
                 with np.errstate(all="ignore"):
                     out = f(_dummy_state(), 1, *[v.value for v in values])
             except Exception as err:  # noqa: BLE001 - report at the expression
-                raise MaterialInstanceError(f"evaluating this value failed: {err}", m, e) \
+                raise MaterialInstanceError(
+                    f"evaluating this value failed: {err}", m, e,
+                    "check what it computes (an index out of range, a failed assert...)") \
                     from None
             return Const(_one_lane(out), t)
 
@@ -448,8 +478,16 @@ class Instantiator:
             with np.errstate(all="ignore"):
                 return f(S, len(S), *args)
 
+        def knots(values=tuple(values), nodes=tuple(nodes)):
+            from render.mdlc.knots import merge_knots, uv_knots
+
+            consts = [(m.info[id(n)].type, v.value) for n, v in zip(nodes, values, strict=True)
+                      if isinstance(v, Const)]
+            return merge_knots(uv_knots(m, e, consts),
+                               *[v.knots for v in values if isinstance(v, Vary)])
+
         line, col = m.source.line_col(e.span.start)
-        return Vary(t, lanes, None, f"mdl {m.source.name}:{line}:{col}")
+        return Vary(t, lanes, None, f"mdl {m.source.name}:{line}:{col}", knots)
 
 
 def _one_lane(v):

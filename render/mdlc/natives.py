@@ -11,6 +11,8 @@
   ``mapping_mode`` enum (Listing 9.15);
 * ``::pw_curve`` -- the runtime ``pwc compile`` writes (:func:`pwc.emit.runtime_mdl`);
 * ``::profile_arrays`` -- Listing 14.22's ``tee``;
+* ``::sky`` -- the render core's sun and sky (:class:`render.sky.SunAndSky`) as the
+  environment function ``sun_and_sky`` that ``::base`` re-exports;
 * one module per profile on the profile search path: ``::ornament_2`` holds
   ``ornament_2`` (a ``pw_curve::pw_point[N]``) and ``ornament_2_length``, the module
   ``pwc compile`` would write for it;
@@ -40,12 +42,13 @@ from mdl import types as T
 from mdl.loader import ModuleText
 
 __all__ = ["WorkbenchModules", "bind_native", "LIBRARY_DIR", "native_value", "curve_from_lanes",
-           "NATIVE_MODULES", "PROFILE_VALUES", "register_profiles"]
+           "NATIVE_MODULES", "PROFILE_VALUES", "register_profiles", "SkyFunction",
+           "sun_and_sky_light"]
 
 #: the workbench's MDL library (modules written in MDL for the workbench)
 LIBRARY_DIR = Path(__file__).resolve().parent.parent / "library" / "mdl"
 #: modules implemented in Python
-NATIVE_MODULES = ("::df", "::materials", "::functions")
+NATIVE_MODULES = ("::df", "::materials", "::functions", "::sky")
 
 
 def _mdl_number(x: float) -> str:
@@ -247,12 +250,106 @@ def profile_arrays_text() -> str:
             f"export const float2[{len(TEE)}] tee(\n    {rows});\n")
 
 
+#: ``::sky``: base::sun_and_sky's parameters (the names of MDL's ``::base``; the defaults
+#: are the workbench's: its sky's units and size).  What the render core's sky models:
+#: on, multiplier, rgb_unit_conversion, haze, ground_color, sun_direction,
+#: sun_disk_intensity, sun_disk_scale, y_is_up; the rest are accepted and have no effect
+#: (docs/mdl.md, "base::sun_and_sky").
+SKY_MODULE = """\
+mdl 1.6;
+
+// the render core's sun and sky, render.sky.SunAndSky (native): the radiance arriving
+// from state::direction() (an environment function), RGB = cd/m^2 x rgb_unit_conversion
+// x multiplier.  haze is Preetham's turbidity minus 2; sun_disk_scale is the sun's
+// radius in multiples of the real sun's (0.2666 degrees).
+export color sun_and_sky(
+    uniform bool on = true,
+    uniform float multiplier = 1.0,
+    uniform color rgb_unit_conversion = color(0.0001),
+    uniform float haze = 1.0,
+    uniform float redblueshift = 0.0,
+    uniform float saturation = 1.0,
+    uniform float horizon_height = 0.0,
+    uniform float horizon_blur = 0.1,
+    uniform color ground_color = color(0.2),
+    uniform color night_color = color(0.0),
+    uniform float3 sun_direction = float3(0.0, 1.0, 0.0),
+    uniform float sun_disk_intensity = 1.0,
+    uniform float sun_disk_scale = 1.0,
+    uniform float sun_glow_intensity = 1.0,
+    uniform bool y_is_up = true
+) varying;
+"""
+
+#: the real sun's angular radius, degrees
+SUN_RADIUS = 0.2666
+
+
+class SkyFunction:
+    """``sun_and_sky(...)`` as a value: the core's light (:attr:`sky`) and, called on a
+    state, its radiance toward ``-state.direction``... that is, arriving along
+    ``state::direction()`` looked up from the scene (MDL's environment convention)."""
+
+    def __init__(self, sky):
+        self.sky = sky
+
+    def __call__(self, S):
+        d = getattr(S, "direction", None)
+        if d is None:
+            return np.zeros((len(S), 3))
+        return self.sky.eval(np.asarray(d, dtype=np.float64))
+
+
+def sun_and_sky_light(on=True, multiplier=1.0, rgb_unit_conversion=(1e-4,) * 3, haze=1.0,
+                      redblueshift=0.0, saturation=1.0, horizon_height=0.0, horizon_blur=0.1,
+                      ground_color=(0.2,) * 3, night_color=(0.0,) * 3,
+                      sun_direction=(0.0, 1.0, 0.0), sun_disk_intensity=1.0,
+                      sun_disk_scale=1.0, sun_glow_intensity=1.0, y_is_up=True):
+    """The :class:`render.sky.SunAndSky` of a ``base::sun_and_sky`` call (cached).
+
+    Raises
+    ------
+    ValueError
+        A value the sky refuses (a zero sun direction, haze outside [0, 8]...).
+    """
+    key = tuple(np.asarray(v, dtype=np.float64).round(12).tobytes() for v in (
+        on, multiplier, rgb_unit_conversion, haze, ground_color, sun_direction,
+        sun_disk_intensity, sun_disk_scale, y_is_up))
+    if key not in _SKIES:
+        _SKIES[key] = _make_sky(on, multiplier, rgb_unit_conversion, haze, ground_color,
+                                sun_direction, sun_disk_intensity, sun_disk_scale, y_is_up)
+    return _SKIES[key]
+
+
+_SKIES: dict = {}
+
+
+def _make_sky(on, multiplier, unit, haze, ground, direction, disk_intensity, disk_scale,
+              y_is_up):
+    from render.sky import SunAndSky
+
+    d = np.asarray(direction, dtype=np.float64)
+    if not y_is_up:
+        d = np.array([d[0], d[2], -d[1]])  # z up -> the workbench's y up
+    unit = np.asarray(unit, dtype=np.float64)
+    if not np.allclose(unit, unit[0]):
+        raise ValueError(f"rgb_unit_conversion must be grey here, got {tuple(unit)} (the "
+                         "sky's colour is the model's)")
+    if not 0.0 <= float(haze) <= 8.0:
+        raise ValueError(f"haze must be in [0, 8] (Preetham's turbidity 2..10), got {haze}")
+    intensity = float(multiplier) * float(unit[0]) / 1e-4 if on else 0.0
+    return SunAndSky(d, turbidity=2.0 + float(haze), intensity=intensity,
+                     sun_radius=SUN_RADIUS * float(disk_scale),
+                     sun_scale=float(disk_intensity),
+                     ground_albedo=np.clip(np.asarray(ground, dtype=np.float64), 0.0, 1.0))
+
+
 class WorkbenchModules:
     """The front end's provider of the workbench's modules (see the module docstring)."""
 
     def fixed(self) -> tuple[str, ...]:
         """Modules a file of the same name does not shadow (the renderer's ``::df``)."""
-        return ("::df",)
+        return ("::df", "::sky")
 
     def find(self, qname: str) -> ModuleText | None:
         name = qname.removeprefix("::")
@@ -265,6 +362,9 @@ class WorkbenchModules:
         if name == "functions":
             return ModuleText(qname, functions_module_text(), "<workbench module ::functions>",
                               None, "native", {"kind": "functions"})
+        if name == "sky":
+            return ModuleText(qname, SKY_MODULE, "<workbench module ::sky>", None, "native",
+                              {"kind": "sky"})
         if name == "pw_curve":
             from pwc.emit import runtime_mdl
 
@@ -316,7 +416,7 @@ class WorkbenchModules:
     def names(self) -> list[str]:
         from render.library.resources import profile_names
 
-        out = ["::df", "::materials", "::functions", "::pw_curve", "::profile_arrays"]
+        out = ["::df", "::materials", "::functions", "::sky", "::pw_curve", "::profile_arrays"]
         out += ["::" + f.stem for f in LIBRARY_DIR.glob("*.mdl")]
         out += ["::" + n for n in profile_names()]
         return out
@@ -386,9 +486,14 @@ def native_value(value, t: T.Type, curves: dict | None = None):
 
 def bind_native(overload, curves: dict | None = None):
     """A lane binding ``(S, n, *args) -> lane value`` of a native library function."""
-    from render.library.functions import FUNCTIONS
+    data = overload.module.native if isinstance(overload.module.native, dict) else {}
+    if data.get("kind") == "sky":
+        def fn(**kwargs):
+            return SkyFunction(sun_and_sky_light(**kwargs))
+    else:
+        from render.library.functions import FUNCTIONS
 
-    fn = FUNCTIONS[overload.name]
+        fn = FUNCTIONS[overload.name]
     params = overload.params
     ret = overload.ret
 

@@ -127,7 +127,7 @@ def test_constant_structs_enums_and_named_arguments():
     module = load(text)
     kind = next(e for e in module.scope["kind"] if isinstance(e, TypeEntity)).type
     assert kind.values == [("a", 0), ("b", 4), ("c", 5)]
-    assert [str(a) for a in kind.annotations] == ["anno::description('kinds')"]
+    assert [str(a) for a in kind.annotations] == ['anno::description("kinds")']
     assert [str(a) for a in kind.value_annotations["c"]] == ["anno::hidden()"]
     assert module.constant("one") == {"k": "c", "p": (1.0, 2.0)}
     assert module.constant("two") == {"k": "b", "p": (0.0, 0.0)}
