@@ -1335,6 +1335,14 @@ class Checker:
 
     def check_lvalue(self, e, info: ExprInfo) -> None:
         root = self.root_local(e)
+        base = e
+        while isinstance(base, (A.Member, A.Index)):
+            base = base.obj
+        bi = self.m.info.get(id(base))
+        if root is None and isinstance(base, A.Ref) and bi is not None and \
+                isinstance(bi.target, ConstEntity):
+            self.poison(f"'{base.name.text}' is a constant and cannot be assigned", e,
+                        "copy it into a variable first")
         if root is None or not isinstance(e, (A.Ref, A.Member, A.Index)):
             self.poison("the left side of an assignment is not assignable", e,
                         "assign to a variable, a field, a component or an element")

@@ -44,6 +44,29 @@ _BINARY = [("||",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="), ("<", "<=", "
 _PREC = {op: i for i, ops in enumerate(_BINARY) for op in ops}
 
 
+def _unclosed_by_indent(text: str) -> int | None:
+    """The first line ending in '{' after which the code goes back to its indentation
+    (or less) without a '}' (a guess at the brace left open), or None."""
+    lines = text.split("\n")
+
+    def indent(s: str) -> int:
+        return len(s) - len(s.lstrip())
+
+    for i, line in enumerate(lines):
+        code = line.split("//")[0].rstrip()
+        if not code.endswith("{"):
+            continue
+        level = indent(line)
+        for later in lines[i + 1:]:
+            if not later.strip() or later.lstrip().startswith("//"):
+                continue
+            if indent(later) <= level:
+                if not later.lstrip().startswith("}"):
+                    return i + 1
+                break
+    return None
+
+
 class _Parser:
     def __init__(self, src: Source):
         self.src = src
@@ -490,8 +513,12 @@ class _Parser:
         stmts = []
         while not self.at("}"):
             if self.at("eof"):
-                self.fail("missing '}' at the end of the block",
-                          fix="add '}' to close the '{' it belongs to")
+                line, _ = self.src.line_col(start)
+                guess = _unclosed_by_indent(self.src.text)
+                where = (f"; by the indentation, the '{{' of line {guess} is the one left "
+                         "open" if guess is not None and guess != line else "")
+                self.fail(f"missing '}}' at the end of the block opened on line {line}",
+                          fix=f"add '}}' to close the '{{' it belongs to{where}")
             stmts.append(self.statement())
         self.advance()
         self.leave()

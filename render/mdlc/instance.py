@@ -222,7 +222,7 @@ class Instantiator:
             raise
         except (ValueError, TypeError, LookupError) as e:
             raise MaterialInstanceError(
-                f"{o.name}(...): {e}", module, node,
+                f"{o.name}(...): {e}", module, _argument_node(node, o, str(e)),
                 f"change the value it names (pwc mdl info {o.module.qname} lists the "
                 "parameters)") from None
         raise MaterialInstanceError(f"'{o.name}' of {o.module.qname} has no implementation",
@@ -250,7 +250,8 @@ class Instantiator:
                 return cls(**kwargs)
             except ValueError as e:
                 raise MaterialInstanceError(f"{st.qname.removeprefix('::')}(...): {e}",
-                                            module, node, "change the value it names") from None
+                                            module, _argument_node(node, o, str(e)),
+                                            "change the value it names") from None
         if o.module.kind == "native":
             return self.native(o, args, module, node)
         raise MaterialInstanceError(f"struct {st.name} holds distribution functions; only "
@@ -488,6 +489,21 @@ class Instantiator:
 
         line, col = m.source.line_col(e.span.start)
         return Vary(t, lanes, None, f"mdl {m.source.name}:{line}:{col}", knots)
+
+
+def _argument_node(node, o: Overload, message: str):
+    """The argument of call ``node`` that ``message`` names (``material.ior must be...``,
+    ``roughness must be...``), else the call."""
+    import re
+
+    if not isinstance(node, A.Call):
+        return node
+    names = [p.name for p in o.params]
+    for k, a in enumerate(node.args):
+        name = a.name if a.name is not None else (names[k] if k < len(names) else None)
+        if name and re.search(rf"(^|[.\s']){re.escape(name)}\b", message):
+            return a
+    return node
 
 
 def _one_lane(v):
