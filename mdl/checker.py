@@ -458,19 +458,19 @@ class Checker:
                        "write the parameters out, then call g with them")
             return
         sizevars: dict = {}
-        try:
-            ret, rq = self.resolve_type(d.ret, allow_deferred=False, sizevars=sizevars,
-                                        is_return=True)
-        except _Poison:
-            ret, rq = T.ERROR, None
         params = []
         seen = set()
-        for p in d.params:
+        for p in d.params:  # first: a return type may be sized by a T[<N>] parameter
             if p.name in seen:
                 self.error(f"duplicate parameter '{p.name}'", p.name_span,
                            "rename one of the parameters")
             seen.add(p.name)
             params.append(self.param_info(p, sizevars))
+        try:
+            ret, rq = self.resolve_type(d.ret, allow_deferred=False, sizevars=sizevars,
+                                        is_return=True)
+        except _Poison:
+            ret, rq = T.ERROR, None
         if isinstance(ret, T.ArrayT) and ret.sizevar is not None and \
                 ret.sizevar.name not in sizevars:
             self.error(f"unknown array size '{ret.sizevar.name}'", d.ret,
@@ -1798,6 +1798,11 @@ class Checker:
                             "candidates: " + "; ".join(o.signature() for o, _ in best[:4])
                             + " (convert an argument to pick one)")
         o, (slots, costs, sizes) = best[0]
+        for a in o.annotations:
+            if a.name == "::anno::deprecated":
+                why = f": {a.args[0]}" if a.args else ""
+                self.warning(f"{label or o.name} is deprecated{why}", e.callee,
+                             "see the function's documentation for its replacement")
         return self.finish_call(e, o, slots, sizes, infos, label)
 
     def arg_fix(self, o: Overload, msg: str, e: A.Call, infos) -> str:

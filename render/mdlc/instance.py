@@ -41,6 +41,9 @@ from render.mdlc.natives import native_value
 __all__ = ["Const", "Vary", "MaterialInstanceError", "Instantiator", "to_core"]
 
 
+#: built-in constructors of data values (``float2 p(x, y);`` in a let)
+_DATA_CTORS = ("scalar", "vector", "color", "matrix")
+
 #: the fix for material parts built other than MDL allows
 _PARTS_FIX = "build material parts from constructor and material calls, let and ?: only"
 
@@ -205,6 +208,10 @@ class Instantiator:
         kwargs = {p.name: to_core(args[p.name], p.type) for p in o.params if p.name in args}
         try:
             if kind == "df":
+                if o.name == "fresnel_layer" and isinstance(o.params[0].type, T.Color):
+                    from render.materials.chapter6 import fresnel_layer_of
+
+                    return fresnel_layer_of(**kwargs)  # MDL before 1.4
                 return getattr(df, o.name)(**kwargs)
             if kind == "materials":
                 from render.materials import MATERIALS
@@ -321,6 +328,10 @@ class Instantiator:
                     loc = m.locals[id(dc)]
                     if dc.init is not None:
                         inner[id(loc)] = self.eval(m, dc.init, inner, want=loc.type)
+                    elif dc.ctor_args is not None and not is_material_level(loc.type) and \
+                            m.info[id(dc)].call is not None and \
+                            m.info[id(dc)].call.kind in _DATA_CTORS:
+                        inner[id(loc)] = self.data_ctor(m, dc, inner)
                     elif dc.ctor_args is not None:
                         inner[id(loc)] = self.call(m, dc, inner)
                     else:
@@ -333,6 +344,28 @@ class Instantiator:
                 return arr[int(LN.uniform_value(i.value))]
         raise MaterialInstanceError(f"this {type(e).__name__.lower()} cannot build a "
                                     f"{info.type}", m, e, _PARTS_FIX)
+
+    def data_ctor(self, m, dc, env):
+        """``float2 p(x, y);`` in a let: a built-in constructor of data values."""
+        from mdl.construct import construct
+
+        call = m.info[id(dc)].call
+        t = call.type
+        args = [a for a in call.args if a is not None]
+        vals = [self.eval(m, a, env) for a in args]
+        types = [v.type if isinstance(v, (Const, Vary)) else m.info[id(a)].type
+                 for v, a in zip(vals, args, strict=True)]
+        if all(isinstance(v, Const) for v in vals):
+            return Const(construct(call.kind, t, [v.value for v in vals], types), t)
+
+        def lanes(S, vals=tuple(vals)):
+            parts = [v.value if isinstance(v, Const) else v.lanes(S) for v in vals]
+            n = len(S)
+            parts = [LN.broadcast_lanes(x, n) if LN.lanes_of(x) == 1 else x for x in parts]
+            return construct(call.kind, t, parts, types, n)
+
+        return Vary(t, lanes, None, dc.name,
+                    lambda: merge_knots(*[v.knots for v in vals if isinstance(v, Vary)]))
 
     def default_value(self, t: T.Type, m, node):
         if isinstance(t, T.DF):

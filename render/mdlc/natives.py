@@ -163,11 +163,19 @@ def _declare(name: str, function, module: str, qualifier: str = "") -> str:
     return f"export {ret} {name}({', '.join(ps)}){q};"
 
 
+#: MDL before 1.4 (the Handbook's): fresnel_layer took a colour ior
+_FRESNEL_BEFORE_1_4 = (
+    "export bsdf fresnel_layer(color ior, float weight = 1.0, bsdf layer = bsdf(), "
+    "bsdf base = bsdf(), float3 normal = state::normal()) [[ anno::deprecated(\"MDL before "
+    "1.4: fresnel_layer's ior is a float since; for a colour ior call "
+    "df::color_fresnel_layer\") ]];")
+
+
 @cache
 def df_module_text() -> str:
     from render.material import DF_SIGNATURES
 
-    out = ["mdl 1.6;", "", "import ::state::*;", "",
+    out = ["mdl 1.6;", "", "import ::state::*;", "import ::anno::*;", "",
            "// the distribution functions of the render core (render.df)",
            "export enum scatter_mode { scatter_reflect, scatter_transmit, "
            "scatter_reflect_transmit };", ""]
@@ -196,6 +204,8 @@ def df_module_text() -> str:
                 text += f" = {dt}"
             ps.append(text)
         out.append(f"export {kind} {name}({', '.join(ps)});")
+        if name == "fresnel_layer":
+            out.append(_FRESNEL_BEFORE_1_4)
         if name in ("normalized_mix", "clamped_mix", "color_normalized_mix",
                     "color_clamped_mix"):
             comp = "color_edf_component" if name.startswith("color_") else "edf_component"
