@@ -574,7 +574,7 @@ class Checker:
     def module_for(self, parts: tuple[str, ...], absolute: bool):
         key = "::".join(parts)
         if absolute:
-            for alias, mod in self.m.imports.items():
+            for mod in self.m.imports.values():
                 if mod.qname == "::" + key or (isinstance(mod, _Partial)
                                                 and mod.module.qname == "::" + key):
                     return mod
@@ -794,7 +794,7 @@ class Checker:
 
     def check_struct_defaults(self, o: Overload) -> None:
         st = o.ret
-        for f, p in zip(st.fields, o.params, strict=False):
+        for f, _p in zip(st.fields, o.params, strict=False):
             if f.default is None:
                 continue
             self.scopes = [{}]
@@ -826,7 +826,7 @@ class Checker:
                 self.error(f"function '{o.name}' returns {o.ret}, which only materials can",
                            d.ret, "define a material instead: material m(...) = ...;")
         # the fixpoint of local variability: check the body until nothing changes
-        for attempt in range(8):
+        for _attempt in range(8):
             self.final = False
             self.changed = False
             self.check_body(o, d)
@@ -1690,7 +1690,7 @@ class Checker:
         overloads = [x for x in ents if isinstance(x, Overload)]
         if not overloads:
             self.poison(f"'{name.text}' is not a function", callee,
-                        f"use it without '(...)', or call a function")
+                        "use it without '(...)', or call a function")
         return self.resolve_call(e, overloads, name.text)
 
     def is_callable_name(self, n: str) -> bool:
@@ -1956,7 +1956,7 @@ class Checker:
         if isinstance(t, T.DF):
             if e.args:
                 self.poison(f"{name}() takes no arguments (it is the black {name})", e,
-                            f"use a df:: function, e.g. df::diffuse_reflection_bsdf(...)")
+                            "use a df:: function, e.g. df::diffuse_reflection_bsdf(...)")
             return ExprInfo(t, UNIFORM, None, call=CallInfo("df_default", None, t, []))
         infos = self.args_info(e)
         if any(isinstance(i.type, T.ErrorType) for i in infos):

@@ -43,7 +43,8 @@ def register(subparsers) -> argparse.ArgumentParser:
         description="Check MDL modules (.mdl) as the workbench reads them, and describe "
                     "their exports.  Modules they import are found beside them, then in "
                     f"--mdl-path folders, then ${MDL_PATH_ENV}, then the workbench's own "
-                    "modules.", epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "modules.", epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="mdl_command", metavar="{check,info}")
     sub.required = True
     c = sub.add_parser("check", help="report errors and warnings, file:line:col",

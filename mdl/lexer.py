@@ -4,7 +4,8 @@
   comments nest (as the MDL SDK allows, to comment out code);
 * integers: decimal, ``0x`` hexadecimal, ``0``-led octal; floats: ``1.``, ``.5``, ``1e-3``,
   with an optional ``f`` (float, the default) or ``d`` (double) suffix;
-* strings: ``"..."`` with C escapes (``\\n``, ``\\t``, ``\\"``, ``\\\\``, ``\\xHH``, ``\\uXXXX``...),
+* strings: ``"..."`` with C escapes (``\\n``, ``\\t``, ``\\"``, ``\\\\``, ``\\xHH``,
+  ``\\uXXXX``...),
   adjacent strings are one literal;
 * ``[[`` opens an annotation block (its end is two ``]`` tokens, so ``a[b[i]]`` lexes).
 

@@ -176,7 +176,8 @@ export float3 transform_point(coordinate_space from, coordinate_space to, float3
 export float3 transform_vector(coordinate_space from, coordinate_space to, float3 vector) uniform;
 export float3 transform_normal(coordinate_space from, coordinate_space to, float3 normal) uniform;
 export float transform_scale(coordinate_space from, coordinate_space to, float scale) uniform;
-export float3 rounded_corner_normal(uniform float radius = 0.0, uniform bool across_materials = false, uniform float roundness = 1.0) varying;
+export float3 rounded_corner_normal(uniform float radius = 0.0,
+    uniform bool across_materials = false, uniform float roundness = 1.0) varying;
 export float meters_per_scene_unit() uniform;
 export float scene_units_per_meter() uniform;
 export int object_id() uniform;

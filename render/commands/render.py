@@ -15,9 +15,9 @@ import sys
 from pathlib import Path
 
 from pwc.cli import add_profiles_option
-from render.mdlc.options import add_mdl_path_option
 from pwc.files import OutputError, prepare_output
 from render.distributed import add_cluster_options
+from render.mdlc.options import add_mdl_path_option
 
 __all__ = ["register", "run"]
 

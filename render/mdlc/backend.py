@@ -42,7 +42,7 @@ class Backend:
 
         base = None if module.path is None else module.path.parent
         known = {(d.loc.line, d.loc.col) for d in module.diagnostics}
-        for node_id, info in list(module.info.items()):
+        for info in list(module.info.values()):
             call = info.call
             if call is None or call.kind != "resource" or not call.args or \
                     call.args[0] is None:

@@ -240,7 +240,7 @@ class _FunctionGen:
             owner = next((p for p in o.params if p.sizevar is sv), None)
             if owner is not None:
                 self.emit(f"n_{name} = size_of(p_{owner.name})")
-        for k, p in enumerate(o.params):
+        for p in o.params:
             if p.default is not None:
                 self.emit(f"if p_{p.name} is None:")
                 self.depth += 1
@@ -270,7 +270,7 @@ class _FunctionGen:
         o = self.o
         st: T.StructType = o.ret
         self.depth = 1
-        for k, (f, p) in enumerate(zip(st.fields, o.params, strict=True)):
+        for f, p in zip(st.fields, o.params, strict=True):
             self.emit(f"if p_{p.name} is None:")
             self.depth += 1
             if f.default is not None:

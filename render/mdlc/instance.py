@@ -36,6 +36,7 @@ from mdl import types as T
 from mdl.checker import Checker, is_material_level
 from mdl.entities import AUTO, UNIFORM, ConstEntity, EnumValueEntity, Local, Overload
 from render.mdlc import compiler
+from render.mdlc.knots import merge_knots
 from render.mdlc.natives import native_value
 
 __all__ = ["Const", "Vary", "MaterialInstanceError", "Instantiator", "to_core"]

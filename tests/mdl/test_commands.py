@@ -16,7 +16,8 @@ export enum finish [[ anno::description("how the stone is worked") ]] { honed, p
 export float gloss(finish f = polished) = f == polished ? 0.1 : 0.4;
 
 export material stone(
-    color tint = color(0.7) [[ anno::display_name("Tint"), anno::hard_range(color(0.0), color(1.0)) ]],
+    color tint = color(0.7)
+        [[ anno::display_name("Tint"), anno::hard_range(color(0.0), color(1.0)) ]],
     uniform finish f = honed)
 [[ anno::description("A stone") ]]
 = material(surface: material_surface(

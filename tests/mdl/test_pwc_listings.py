@@ -17,7 +17,7 @@ from repo import HANDBOOK as SEED_TEXT
 from repo import needs_handbook
 
 from mdl.diagnostics import MdlError
-from mdl.entities import Overload, TypeEntity
+from mdl.entities import TypeEntity
 from mdl.loader import Loader, ModuleText
 
 

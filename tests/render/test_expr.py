@@ -419,7 +419,8 @@ def test_values_and_types():
     assert evaluate_expression("-color(0.5)").value == (-0.5, -0.5, -0.5)
     assert evaluate_expression("-(-4)").value == 4 and evaluate_expression("+.5f").value == 0.5
     assert evaluate_expression("float(3)").value == 3.0
-    assert evaluate_expression("int(3.7)").value == 3 and evaluate_expression("int(-3.7)").value == -3
+    assert evaluate_expression("int(3.7)").value == 3
+    assert evaluate_expression("int(-3.7)").value == -3
     assert evaluate_expression("math::PI").value == pytest.approx(math.pi)
     assert evaluate_expression("pink_stone").value == (0.7, 0.66, 0.63)
     assert str(evaluate_expression("df::scatter_reflect_transmit").type) == "df::scatter_mode"

@@ -8,9 +8,9 @@ image must be statistically the same as the built-in Python material with that p
 
 The statistics: pixels are independent samples.  Two renders of each scene with four
 different seeds estimate each pixel's variance; over blocks of 8 x 8 pixels the difference
-of the two scenes' means, divided by its standard error, must stay within 5 (about 100
-blocks and 3 channels: a false alarm has probability below 1e-4), and the whole image's
-mean within 4 standard errors.  The same test on a moulding 15 % deeper must fail: the
+of the two scenes' means, divided by its standard error, must stay within 5 (48 blocks
+of a 64 x 48 image, 3 channels: a false alarm has probability below 1e-4), and the whole
+image's mean within 4 standard errors.  The same test on a moulding 15 % deeper must fail: the
 test can see a difference of that size.
 """
 
