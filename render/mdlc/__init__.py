@@ -9,7 +9,11 @@ workbench:
 * :mod:`render.mdlc.codegen` and :mod:`render.mdlc.compiler` -- MDL function bodies as
   generated Python over lanes, compiled once per module content;
 * :mod:`render.mdlc.rt` -- what the generated code calls (``::state``, ``::tex``...);
-* :mod:`render.mdlc.instance` -- materials as the render core's materials.
+* :mod:`render.mdlc.instance` -- materials as the render core's materials;
+* :mod:`render.mdlc.knots` -- the creases of a displacement written in MDL, for dicing;
+* :mod:`render.mdlc.environment` -- environment lights written in MDL
+  (``base::sun_and_sky``, or any colour function of ``state::direction()``);
+* :mod:`render.mdlc.backend` -- the workbench as ``pwc mdl``'s back end.
 
 :func:`material_from_call` is the entry point of scenes: a call (``glossy(tint:
 color(0.5))``, or ``stone_molding(scale: 2.0)`` into a named module) becomes a

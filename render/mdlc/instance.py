@@ -533,11 +533,13 @@ def _argument_node(node, o: Overload, message: str):
     if not isinstance(node, A.Call):
         return node
     names = [p.name for p in o.params]
+    best = None
     for k, a in enumerate(node.args):
         name = a.name if a.name is not None else (names[k] if k < len(names) else None)
-        if name and re.search(rf"(^|[.\s']){re.escape(name)}\b", message):
-            return a
-    return node
+        m = re.search(rf"(^|[.\s']){re.escape(name)}\b", message) if name else None
+        if m and (best is None or m.start() < best[0]):
+            best = (m.start(), a)  # the argument the message names first
+    return node if best is None else best[1]
 
 
 def _one_lane(v):
