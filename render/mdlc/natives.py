@@ -391,7 +391,7 @@ class WorkbenchModules:
         return self.profile(qname, name)
 
     def profile(self, qname: str, name: str) -> ModuleText | None:
-        from render.library.resources import find_profile, load_profile
+        from render.library.resources import find_profile
 
         path = find_profile(name)
         if path is None:
@@ -400,15 +400,12 @@ class WorkbenchModules:
             import pwc
             from pwc.emit import to_mdl
 
-            exact = pwc.load(path)
-            text = to_mdl(exact)
-            curve = load_profile(name)
+            text = to_mdl(pwc.load(path))  # the scene's curve is loaded where it is used
         except Exception as e:  # noqa: BLE001 - a profile that does not compile
             text = (f"mdl 1.6;\n// profile {path} does not compile:\n// "
                     + str(e).replace("\n", "\n// ") + "\n")
             return ModuleText(qname, text + f"export const int {name} = __error__;\n",
                               str(path), path, "generated")
-        del curve
         return ModuleText(qname, text, f"<module ::{name} compiled from {path}>", path,
                           "generated", {"kind": "profile", "name": name})
 
