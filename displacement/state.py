@@ -33,6 +33,15 @@ class ShadingState:
         The object's transform (column vectors, ``M @ p``), the same for every lane, for
         ``state::transform_point(..., coordinate_world, ...)`` and its kin; None (a
         surface outside a scene): world space is object space.
+    geometry_normal : (n, 3) float64 or None
+        ``state::geometry_normal()``: the unit normal of the triangle (flat), when the
+        caller knows it; None: MDL code reading it gets ``normal`` (identical on flat
+        shaded surfaces).
+    direction : (n, 3) float64 or None
+        ``state::direction()``: the direction of the ray, toward the surface, when the
+        caller knows it (None: zero vectors).
+    object_id : int
+        ``state::object_id()`` (uniform).
     """
 
     position: np.ndarray
@@ -41,6 +50,9 @@ class ShadingState:
     tangent_u: np.ndarray
     tangent_v: np.ndarray
     object_to_world: np.ndarray | None = None
+    geometry_normal: np.ndarray | None = None
+    direction: np.ndarray | None = None
+    object_id: int = 0
 
     def __post_init__(self) -> None:
         n = len(self.uv)
@@ -63,4 +75,6 @@ class ShadingState:
         return ShadingState(
             self.position[index], self.normal[index], self.uv[index],
             self.tangent_u[index], self.tangent_v[index], self.object_to_world,
+            None if self.geometry_normal is None else self.geometry_normal[index],
+            None if self.direction is None else self.direction[index], self.object_id,
         )

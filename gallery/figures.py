@@ -159,7 +159,9 @@ def read_figure(path: str | Path) -> Figure:
     except tomllib.TOMLDecodeError as e:
         raise FigureError(f"{path}: {e}") from None
     captions = tuple(dict.fromkeys(
-        " ".join(obj["material"].split()) for obj in scene.get("objects", [])
+        " ".join((obj["material"] if isinstance(obj["material"], str)
+                  else str(obj["material"].get("call", ""))).split())
+        for obj in scene.get("objects", [])
         if "material" in obj and obj.get("name") not in STAGE_OBJECTS))
     w, h = scene.get("render", {}).get("resolution", (256, 256))
     fig = Figure(name=path.stem, scene=path, number=number, chapter=chapter,

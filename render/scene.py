@@ -31,9 +31,22 @@ its figure captions, parsed by :mod:`render.expr`.  Example (the Handbook's stag
     scale = 1.0
     material = "waves(distance: float2(0.02, 0.02), frequency: float2(10.0, 10.0))"
 
+    [[objects]]                     # a material written in MDL: a call into a module
+    surface = "square"
+    material = { module = "mouldings.mdl", call = "stone_molding(scale: 2.0)" }
+
+A material is an MDL call: as a string, a call of the workbench's materials and functions
+by name (:mod:`render.expr`); as a table, ``call`` into the exports of ``module`` (an
+``.mdl`` file, or a qualified name ``::a::b``), found beside the scene, then in the
+``--mdl-path`` folders, then ``$PWC_MDL_PATH``, then the workbench's own MDL library
+(:mod:`render.mdlc`).
+
 Light types: ``point`` (position, intensity), ``spot`` (position, direction or look_at,
 intensity, cutoff_angle, beam_width), ``directional`` (direction, irradiance),
-``environment`` (radiance, or file = lat-long EXR with scale and rotation),
+``environment`` (radiance, or file = lat-long EXR with scale and rotation, or function =
+an MDL call of a colour function of ``state::direction()`` such as
+``base::sun_and_sky(...)``, optionally into ``module``, baked at ``resolution``:
+:mod:`render.mdlc.environment`),
 ``sun_and_sky`` (sun_direction, or elevation and azimuth in degrees; turbidity,
 intensity, sun_radius, sun_scale, sky_scale, ground_albedo: :class:`render.sky.SunAndSky`),
 ``quad`` (center, normal, size, up, radiance or intensity) and ``sphere`` (center,
@@ -834,7 +847,7 @@ def patch_scene_text(text: str, render: dict | None = None,
     return "".join(lines)
 
 
-def load_scene(path, overrides: dict | None = None, profile_dirs=()) -> Scene:
+def load_scene(path, overrides: dict | None = None, profile_dirs=(), mdl_paths=()) -> Scene:
     """Read a TOML scene file.
 
     Parameters
@@ -845,6 +858,9 @@ def load_scene(path, overrides: dict | None = None, profile_dirs=()) -> Scene:
     profile_dirs : paths, optional
         Folders of profiles named in materials (``myprof::myprof``), searched after the
         scene's own folder and before ``$PWC_PROFILE_PATH`` and the bundled library.
+    mdl_paths : paths, optional
+        Folders of MDL modules (``--mdl-path``), searched after the scene's own folder and
+        before ``$PWC_MDL_PATH`` and the workbench's library.
 
     Returns
     -------
@@ -861,12 +877,12 @@ def load_scene(path, overrides: dict | None = None, profile_dirs=()) -> Scene:
     except OSError as e:
         raise SceneReadError(f"cannot read the scene file: {e.strerror or e}", str(path)) from None
     return parse_scene(text, str(path), overrides=overrides, base_dir=path.parent,
-                       profile_dirs=profile_dirs)
+                       profile_dirs=profile_dirs, mdl_paths=mdl_paths)
 
 
 def parse_scene(
     text: str, path: str = "<scene>", overrides: dict | None = None, base_dir: Path | None = None,
-    profile_dirs=(),
+    profile_dirs=(), mdl_paths=(),
 ) -> Scene:
     """Parse scene text (see the module docstring for the format).
 
@@ -891,13 +907,25 @@ def parse_scene(
         msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", msg)
         raise SceneError(f"TOML syntax error: {msg}", path, line, col) from None
     loc = _Locator(text)
-    return _Parser(data, loc, path, base_dir, profile_dirs).scene(overrides or {})
+    return _Parser(data, loc, path, base_dir, profile_dirs, mdl_paths).scene(overrides or {})
+
+
+def _key_re(key: str):
+    """``key =`` in a TOML line."""
+    return re.compile(rf"\b{key}\s*=")
+
+
+def _value_re(key: str):
+    """``key = `` up to the opening quote of its string value (group 1: the quote)."""
+    return re.compile(rf"""\b{key}\s*=\s*('''|\"\"\"|'|")""")
 
 
 class _Parser:
-    def __init__(self, data: dict, loc: _Locator, path: str, base_dir: Path, profile_dirs=()):
+    def __init__(self, data: dict, loc: _Locator, path: str, base_dir: Path, profile_dirs=(),
+                 mdl_paths=()):
         self.data, self.loc, self.path, self.base_dir = data, loc, path, base_dir
         self.profile_dirs = (base_dir, *(Path(d) for d in profile_dirs))
+        self.mdl_paths = tuple(Path(d) for d in mdl_paths)
 
     def error(self, msg: str, section: str, index: int | None = None, key: str | None = None):
         line, col = (
@@ -1218,9 +1246,12 @@ class _Parser:
             raise self.error(f"objects[{i}]: mesh {str(p)!r}: {e}", "objects", i, "mesh") from None
 
     def material(self, text, i: int, section: str = "objects"):
+        if isinstance(text, dict):
+            return self.module_material(text, i, section)
         if not isinstance(text, str):
             raise self.error(
-                f"{section}[{i}]: material must be an MDL call expression string, got {text!r}",
+                f"{section}[{i}]: material must be an MDL call (a string), or a table "
+                f'{{ module = "file.mdl", call = "name(...)" }}, got {text!r}',
                 section,
                 i,
                 "material",
@@ -1242,6 +1273,60 @@ class _Parser:
             if fix:
                 msg += f" ({fix})"
             raise SceneError(f"{section}[{i}]: material: {msg}", self.path, ln, c) from None
+
+    def module_material(self, t: dict, i: int, section: str):
+        """``material = { module = "file.mdl", call = "name(...)" }``: a call into an MDL
+        module; errors are located in this file (the call) or in the module."""
+        from mdl.diagnostics import MdlError
+        from render.library.resources import search_paths
+        from render.material import material as Material
+        from render.mdlc import material_from_call
+
+        form = ' (a material table is { module = "file.mdl", call = "name(...)" })'
+        self._check_keys(t, {"module", "call"}, section, i, "material", note=form)
+        for key in ("module", "call"):
+            if not isinstance(t.get(key), str) or not t[key].strip():
+                raise self.error(f"{section}[{i}]: material.{key} must be a non-empty string"
+                                 + form, section, i, "material")
+        line, col = self._call_position(section, i)
+        try:
+            with search_paths(profile_dirs=self.profile_dirs):
+                value, info = material_from_call(
+                    t["call"], t["module"], base_dir=self.base_dir, mdl_paths=self.mdl_paths,
+                    source_name=self.path, line=line or 1, col=col or 1)
+        except MdlError as e:
+            d = e.first
+            msg = d.message + (f" ({d.fix})" if d.fix else "")
+            if d.loc.file == self.path:
+                raise SceneError(f"{section}[{i}]: material: {msg}", self.path, d.loc.line,
+                                 d.loc.col) from None
+            raise SceneError(f"{section}[{i}]: material: in {d.loc}: {msg}", self.path,
+                             line, col) from None
+        except ValueError as e:
+            raise self.error(f"{section}[{i}]: material: {e}", section, i, "material") from None
+        if not isinstance(value, Material):
+            raise SceneError(f"{section}[{i}]: material: the call gives {_a(info.type)}, not a "
+                             "material", self.path, line, col)
+        return value
+
+    def _call_position(self, section: str, i: int, key: str = "call") -> tuple[int, int]:
+        """(line, column) of the first character of the ``call`` (or ``key``) string's
+        value."""
+        key_re, value_re = _key_re(key), _value_re(key)
+        line, _ = self.loc.key(section, i, key)
+        if key == "call" and (not line or not key_re.search(self.loc.lines[line - 1])):
+            line, _ = self.loc.key(section, i, "material")
+        if not line:
+            return 0, 0
+        start = self.loc.line_start[line - 1]
+        m = value_re.search(self.loc.text, start)
+        if not m:
+            return line, 0
+        pos = m.end()
+        if len(m.group(1)) == 3 and self.loc.text[pos:pos + 1] == "\n":
+            pos += 1
+        ln = self.loc.text.count("\n", 0, pos) + 1
+        return ln, pos - self.loc.line_start[ln - 1] + 1
 
     def object(self, t: dict, i: int) -> SceneObject:
         if not isinstance(t, dict):
@@ -1301,7 +1386,8 @@ class _Parser:
             self.transform(t, "objects", i),
             str(name),
             tuple(res) if res else None,
-            t["material"],
+            t["material"] if isinstance(t["material"], str) else
+            f"{t['material'].get('module')}: {t['material'].get('call')}",
             displacement_method=method,
             original_displacement=written if method != "displacement" else None,
             **dicing,
@@ -1360,7 +1446,14 @@ class _Parser:
                     self._color(t, "irradiance", sec, i, np.ones(3)),
                 ), None
             if kind == "environment":
-                self._check_keys(t, common | {"radiance", "file", "scale", "rotation"}, sec, i)
+                self._check_keys(t, common | {"radiance", "file", "scale", "rotation", "function",
+                                              "module", "resolution"}, sec, i)
+                given = [k for k in ("radiance", "file", "function") if k in t]
+                if len(given) > 1:
+                    raise self.error(f"lights[{i}]: give one of radiance, file or function, "
+                                     f"not {' and '.join(given)}", sec, i, given[1])
+                if "function" in t:
+                    return self.environment_function(t, i), None
                 if "file" in t:
                     from displacement.textures import read_texture
 
@@ -1437,6 +1530,40 @@ class _Parser:
             raise self.error(f"lights[{i}]: {e}", sec, i) from None
 
 
+    def environment_function(self, t: dict, i: int):
+        """``type = "environment", function = "base::sun_and_sky(...)"``: an MDL colour
+        function of ``state::direction()`` (:func:`render.mdlc.environment_from_call`)."""
+        from mdl.diagnostics import MdlError
+        from render.mdlc.environment import environment_from_call
+
+        sec = "lights"
+        for key in ("function", "module"):
+            if key in t and (not isinstance(t[key], str) or not t[key].strip()):
+                raise self.error(f"lights[{i}]: {key} must be a non-empty string", sec, i, key)
+        resolution = t.get("resolution", [256, 512])
+        if not (isinstance(resolution, list) and len(resolution) == 2 and all(
+                isinstance(x, int) and not isinstance(x, bool) and 2 <= x <= 8192
+                for x in resolution)):
+            raise self.error(f"lights[{i}]: resolution must be [rows, columns], integers in "
+                             f"[2, 8192], got {resolution!r}", sec, i, "resolution")
+        line, col = self._call_position(sec, i, "function")
+        try:
+            light = environment_from_call(
+                t["function"], t.get("module"), base_dir=self.base_dir,
+                mdl_paths=self.mdl_paths, resolution=resolution, source_name=self.path,
+                line=line or 1, col=col or 1)
+        except MdlError as e:
+            d = e.first
+            msg = d.message + (f" ({d.fix})" if d.fix else "")
+            if d.loc.file == self.path:
+                raise SceneError(f"lights[{i}]: function: {msg}", self.path, d.loc.line,
+                                 d.loc.col) from None
+            raise SceneError(f"lights[{i}]: function: in {d.loc}: {msg}", self.path, line,
+                             col) from None
+        except ValueError as e:
+            raise self.error(f"lights[{i}]: function: {e}", sec, i, "function") from None
+        return light
+
     def sun_and_sky(self, t: dict, i: int):
         from render.sky import SunAndSky, sun_direction_from_angles
 
@@ -1479,6 +1606,11 @@ class _Parser:
         except ValueError as e:
             key = next((k for k in (*numbers, "ground_albedo") if k in str(e)), None)
             raise self.error(f"lights[{i}]: {e}", sec, i, key if key in t else None) from None
+
+
+def _a(t) -> str:
+    s = str(t)
+    return ("an " if s[:1] in "aeiou" else "a ") + s
 
 
 def _is_number(v) -> bool:

@@ -54,11 +54,11 @@ def test_no_test_reads_outside_the_repository(tmp_path):
     """A copy of the repository with no ../shared beside it: the tests that quote the
     Handbook skip with the reason; nothing fails."""
     copy = tmp_path / "alone" / "repo"
-    for part in ("pwc", "tests", "profiles", "pyproject.toml"):
+    for part in ("pwc", "mdl", "tests", "profiles", "pyproject.toml"):
         src = ROOT / part
         (shutil.copytree if src.is_dir() else shutil.copy)(src, copy / part)
     assert not (copy.parent / "shared").exists()
-    r = _pytest("tests/pwc/test_profiles.py", "tests/test_mdl_syntax.py", "-k",
+    r = _pytest("tests/pwc/test_profiles.py", "tests/mdl/test_pwc_listings.py", "-k",
                 "handbook or book or listing", cwd=copy)
     assert r.returncode == 0, r.stdout[-3000:]
     assert "skipped" in r.stdout and "shared/seeds" in r.stdout and "failed" not in r.stdout

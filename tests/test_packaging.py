@@ -18,7 +18,7 @@ PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
 def test_every_package_is_listed():
     listed = set(PYPROJECT["tool"]["setuptools"]["packages"])
     on_disk = {".".join(p.parent.relative_to(ROOT).parts)
-               for top in ("pwc", "displacement", "render", "trade", "gallery")
+               for top in ("pwc", "mdl", "displacement", "render", "trade", "gallery")
                for p in (ROOT / top).rglob("__init__.py")}
     assert on_disk <= listed, f"add to pyproject.toml's packages: {sorted(on_disk - listed)}"
     mapped = PYPROJECT["tool"]["setuptools"]["package-dir"]
@@ -29,12 +29,14 @@ def test_every_package_is_listed():
 # the scene loads a texture (travertine.png) and a profile (ornament_2) by name
 CHECK = """
 import pathlib, sys
-import pwc, render
+import pwc, render, mdl
 from render.library.resources import bundled_scenes, bundled_textures, load_texture
 from render.scene import load_scene
 site = pathlib.Path(sys.argv[1]).resolve()
-for module in (pwc, render):
+for module in (pwc, render, mdl):
     assert site in pathlib.Path(module.__file__).resolve().parents, module.__file__
+from render.mdlc.natives import LIBRARY_DIR
+assert site in LIBRARY_DIR.resolve().parents and (LIBRARY_DIR / "geometry.mdl").is_file()
 assert site in bundled_scenes().resolve().parents and site in bundled_textures().resolve().parents
 scene = load_scene(bundled_scenes() / "fig_15_22.toml")
 assert load_texture("uv.png").data.shape[2] == 3

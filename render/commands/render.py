@@ -17,6 +17,7 @@ from pathlib import Path
 from pwc.cli import add_profiles_option
 from pwc.files import OutputError, prepare_output
 from render.distributed import add_cluster_options
+from render.mdlc.options import add_mdl_path_option
 
 __all__ = ["register", "run"]
 
@@ -85,6 +86,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--half", action="store_true", help="write 16-bit half floats")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     add_profiles_option(p)
+    add_mdl_path_option(p)
     p.set_defaults(func=run)
     return p
 
@@ -136,7 +138,7 @@ def run(args) -> int:
         return _error(str(e), EXIT_IO)
     try:
         scene = load_scene(_scene_file(args.scene), overrides=overrides,
-                           profile_dirs=args.profiles)
+                           profile_dirs=args.profiles, mdl_paths=args.mdl_path)
         if args.resolution:
             import dataclasses
 

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
-from mdl_syntax import EnumRef, parse_module
 from repo import PROFILES
 
 import pwc
+from mdl.entities import TypeEntity
+from mdl.loader import Loader, ModuleText
 from pwc.draw import to_png, to_svg
 from pwc.emit import (
     from_json,
@@ -24,40 +26,62 @@ from pwc.emit import (
 )
 
 
+class _Runtime:
+    """``::pw_curve`` as ``pwc compile`` writes it, for the MDL front end."""
+
+    def find(self, qname):
+        if qname == "::pw_curve":
+            return ModuleText(qname, runtime_mdl(), "pw_curve.mdl", None, "generated")
+        return None
+
+
+def _check(text: str, name: str):
+    """The emitted text, checked by the MDL front end (:mod:`mdl`)."""
+    return Loader(providers=[_Runtime()]).load_text(text, name)
+
+
+def _type(module, name):
+    return next(e for e in module.scope[name] if isinstance(e, TypeEntity)).type
+
+
 def test_runtime_module_is_valid_mdl_with_the_handbook_types():
-    m = parse_module(runtime_mdl(), "pw_curve.mdl")
-    assert m.enums["pw_type"] == [(k.mdl_name, int(k)) for k in pwc.PwType]
-    assert m.enums["displacement_direction"] == [("along_u", 0), ("along_v", 1)]
-    assert [f for _, f, _ in m.structs["pw_point"]] == [
+    m = Loader(providers=[_Runtime()]).load("::pw_curve")
+    assert _type(m, "pw_type").values == [(k.mdl_name, int(k)) for k in pwc.PwType]
+    assert _type(m, "displacement_direction").values == [("along_u", 0), ("along_v", 1)]
+    assert [f.name for f in _type(m, "pw_point").fields] == [
         "type", "t", "pt", "center", "radius", "start_angle", "end_angle"]
     for name in ("point_along_pwc", "displace_to_point", "displace_with_pwc",
                  "y_rotation_3", "displace_to_angular_point", "pwc_angular_displace",
                  "displace_to_pwc_point", "double_pwc_displacement", "point_along_pwc_repeat"):
-        assert name in m.functions
+        assert m.functions(name) and m.functions(name)[0].exported
+    assert not m.diagnostics
 
 
 @pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
 def test_emitted_mdl_parses_back_to_the_json_values(path):
     curve = pwc.load(path)
     doc = json.loads(to_json(curve))
-    m = parse_module(to_mdl(curve), f"{curve.name}.mdl")
-    assert m.imports == ["::pw_curve::*"]
-    assert m.constants[f"{curve.name}_length"].value == pytest.approx(doc["length"], rel=1e-8)
-    arr = m.constants[curve.name]
-    assert arr.type == "pw_curve::pw_point" and arr.array_size == len(doc["points"])
-    for call, p in zip(arr.value, doc["points"], strict=True):
-        assert call.name == "pw_curve::pw_point"
-        assert call.args[0] == EnumRef(f"pw_curve::{p['type']}")
-        assert call.args[1] == pytest.approx(p["t"], rel=1e-8, abs=1e-12)
-        np.testing.assert_allclose(call.args[2], p["pt"], rtol=1e-8, atol=1e-12)
+    text = to_mdl(curve)
+    m = _check(text, f"{curve.name}.mdl")
+    assert {x.qname for x in m.imports.values()} == {"::pw_curve"} and not m.diagnostics
+    assert m.constant(f"{curve.name}_length") == pytest.approx(doc["length"], rel=1e-8)
+    arr = m.constant(curve.name)
+    entity = m.scope[curve.name][0]
+    assert str(entity.type) == f"pw_curve::pw_point[{len(doc['points'])}]" and entity.exported
+    comments = re.findall(r"pw_curve::pw_point\( // (.*)", text)
+    assert len(comments) == len(arr) == len(doc["points"])
+    for point, p, comment in zip(arr, doc["points"], comments, strict=True):
+        assert point["type"] == p["type"]
+        assert point["t"] == pytest.approx(p["t"], rel=1e-8, abs=1e-12)
+        np.testing.assert_allclose(point["pt"], p["pt"], rtol=1e-8, atol=1e-12)
         if p["type"] == "segment":
-            assert len(call.args) == 3
+            assert point["center"] == (0.0, 0.0) and point["radius"] == 0.0
         else:
-            np.testing.assert_allclose(call.args[3], p["center"], rtol=1e-8, atol=1e-12)
-            assert call.args[4:] == pytest.approx(
+            np.testing.assert_allclose(point["center"], p["center"], rtol=1e-8, atol=1e-12)
+            assert [point["radius"], point["start_angle"], point["end_angle"]] == pytest.approx(
                 [p["radius"], p["start_angle"], p["end_angle"]], rel=1e-8, abs=1e-12)
-        assert call.comment.endswith(p["text"]) or "of 2)" in call.comment
-        assert call.comment.startswith(f"line {p['line']}: ")
+        assert comment.rstrip().endswith(p["text"]) or "of 2)" in comment
+        assert comment.startswith(f"line {p['line']}: ")
 
 
 def test_relative_lists_carry_the_property_as_a_comment():
