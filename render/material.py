@@ -90,6 +90,9 @@ __all__ = [
     "DfNode",
     "df",
     "DF_SIGNATURES",
+    "OVERLOADS",
+    "MDL_NAMES",
+    "COMPONENT_KINDS",
     "material_emission",
     "material_surface",
     "material_volume",
@@ -440,18 +443,20 @@ _NORMAL = _StateDefault("state::normal()")
 _DIFFUSE_DEFAULT = _StateDefault("df::diffuse_reflection_bsdf()")
 _SAME_AS_R = _StateDefault("roughness_R")
 _SAME_AS_TT = _StateDefault("roughness_TT")
-#: ``bsdf_component[<N>]`` / ``color_bsdf_component[<N>]`` (the mixers' edf overloads take
-#: ``edf_component`` / ``color_edf_component`` arrays through the same parameter)
+#: ``bsdf_component[<N>]`` / ``color_bsdf_component[<N>]`` (the mixers' edf and vdf overloads
+#: take ``edf_component`` / ``vdf_component`` arrays, and their colour forms, through the same
+#: parameter)
 BsdfComponents = Annotated[Any, MdlType("bsdf_component[]")]
 ColorBsdfComponents = Annotated[Any, MdlType("color_bsdf_component[]")]
-_ARRAY_KINDS = {"bsdf_component": ("bsdf_component", "edf_component", "vdf_component"),
+#: the component kinds an array parameter of each element type takes (the first: its own)
+COMPONENT_KINDS = {"bsdf_component": ("bsdf_component", "edf_component", "vdf_component"),
                 "color_bsdf_component": ("color_bsdf_component", "color_edf_component",
                                          "color_vdf_component")}
 
 
 def _check_components(value: Any, element: str, where: str) -> tuple:
     """An array argument: a list or tuple of component nodes of one kind."""
-    kinds = _ARRAY_KINDS.get(element, (element,))
+    kinds = COMPONENT_KINDS.get(element, (element,))
     if not isinstance(value, list | tuple) or not all(
             isinstance(v, DfNode) and v.kind in kinds for v in value):
         raise ValueError(
@@ -831,9 +836,11 @@ def _make_df_constructor(name: str) -> Callable[..., DfNode]:
 
 
 def _make_overloaded(name: str) -> Callable[..., DfNode]:
-    """A constructor of an MDL name with overloads (:data:`OVERLOADS`): the first
-    overload whose parameters take the arguments and whose df arguments are of the kinds
-    it declares; its ``overloads`` attribute lists them (for :mod:`render.expr`)."""
+    """A constructor of an MDL name with overloads (:data:`OVERLOADS`) for Python
+    callers: the first overload whose parameters take the arguments and whose df
+    arguments are of the kinds it declares.  (MDL text does not come here: ``::df``
+    declares each overload, the front end chooses one by MDL's rules and calls its own
+    constructor, :func:`render.mdlc.natives.df_key`.)"""
     constructors = [_make_df_constructor(k) for k in OVERLOADS[name]]
 
     def constructor(*args, **kwargs) -> DfNode:
@@ -859,7 +866,6 @@ def _make_overloaded(name: str) -> Callable[..., DfNode]:
     constructor.__signature__ = constructors[0].__signature__
     constructor.__annotations__ = constructors[0].__annotations__
     constructor.__doc__ = "\n\n".join(c.__doc__ for c in constructors)
-    constructor.overloads = tuple(constructors)
     return constructor
 
 

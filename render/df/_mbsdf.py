@@ -63,8 +63,8 @@ class Measurement:
     metadata : dict
     """
 
-    reflection: np.ndarray | None
-    transmission: np.ndarray | None
+    reflection: np.ndarray | None = field(repr=False)
+    transmission: np.ndarray | None = field(repr=False)
     name: str = "measurement"
     metadata: dict = field(default_factory=dict)
 

@@ -42,6 +42,7 @@ __all__ = [
     "profile_names",
     "find_texture",
     "load_texture",
+    "load_measurement",
     "INVALID_TEXTURE",
     "CURVE_MODES",
     "evaluation",
@@ -250,19 +251,28 @@ def load_profile(name: str):
 
 
 def find_texture(file: str, base_dir=None) -> Path | None:
-    """``file`` as given if absolute, else the first match in ``base_dir`` and the texture
-    search path; None if not found."""
+    """``file`` as given if absolute, else the first match in ``base_dir`` (a folder, or a
+    sequence of folders searched in order) and the texture search path; None if not
+    found."""
     if not file or "\0" in file:
         return None
     candidate = Path(file)
     if candidate.is_absolute():
         return candidate if candidate.is_file() else None
-    dirs = ((Path(base_dir),) if base_dir is not None else ()) + texture_dirs()
-    for d in dirs:
+    for d in _searched(base_dir):
         path = d / candidate
         if path.is_file():
             return path
     return None
+
+
+def _searched(base_dir) -> tuple[Path, ...]:
+    """The folders a resource is looked for in: ``base_dir`` (one or several, None
+    skipped), then the texture search path."""
+    bases = () if base_dir is None else tuple(
+        d for d in ([base_dir] if isinstance(base_dir, str | os.PathLike) else base_dir)
+        if d is not None)
+    return _as_dirs(bases) + texture_dirs()
 
 
 def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
@@ -273,7 +283,7 @@ def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
     file : str
     gamma : {"linear", "srgb", "default"}
         As :func:`displacement.textures.read_texture`.
-    base_dir : path, optional
+    base_dir : path or sequence of paths, optional
         Searched first.
 
     Raises
@@ -283,7 +293,7 @@ def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
     """
     path = find_texture(file, base_dir)
     if path is None:
-        dirs = ((Path(base_dir),) if base_dir is not None else ()) + texture_dirs()
+        dirs = _searched(base_dir)
         stem = Path(file).stem
         same_stem = sorted({p.name for d in dirs if d.is_dir() for p in d.glob(f"{stem}.*")})
         names = sorted({p.name for d in dirs if d.is_dir() for p in d.iterdir() if p.is_file()})
@@ -301,6 +311,42 @@ def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
         except (OSError, ValueError) as e:
             raise ResourceError(f"cannot read texture {str(path)!r}: {e}") from None
     return with_filter(_TEXTURES[key])
+
+
+def load_measurement(file: str, base_dir=None):
+    """Read the MBSDF file of ``bsdf_measurement("file.mbsdf")`` (cached), found as
+    textures are (:func:`find_texture`: absolute as given, else ``base_dir`` -- the module's
+    or the scene's folder -- then the texture search path).
+
+    Returns
+    -------
+    render.df.Measurement
+
+    Raises
+    ------
+    ResourceError
+        Not found (with the folders searched and a close name), or malformed (the file's
+        path and what is wrong, from :func:`render.df.read_mbsdf`).
+    """
+    from render.df._mbsdf import MbsdfError, read_mbsdf
+
+    path = find_texture(file, base_dir)
+    if path is None:
+        dirs = _searched(base_dir)
+        names = sorted({p.name for d in dirs if d.is_dir() for p in d.glob("*.mbsdf")})
+        hint = difflib.get_close_matches(Path(file).name, names, 1)
+        raise ResourceError(
+            f"bsdf_measurement: no file {file!r} in {', '.join(str(d) for d in dirs)}",
+            f"did you mean {hint[0]!r}?" if hint else
+            "give the MBSDF file's path, relative to the scene file or the module")
+    key = (path.resolve(), path.stat().st_mtime_ns, "mbsdf")
+    if key not in _TEXTURES:
+        try:
+            _TEXTURES[key] = read_mbsdf(path)
+        except MbsdfError as e:
+            raise ResourceError(str(e), "give an MBSDF file (the MDL spec, Appendix B)") \
+                from None
+    return _TEXTURES[key]
 
 
 def with_filter(texture: Texture) -> Texture:

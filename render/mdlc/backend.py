@@ -35,8 +35,9 @@ class Backend:
         self.find_resources(module)
 
     def find_resources(self, module) -> None:
-        """A warning for each texture file named in ``module`` that is not found (MDL reads
-        it as an invalid texture, black; a scene refuses it)."""
+        """A warning for each resource file (a texture, an MBSDF file) named in ``module``
+        that is not found (MDL reads it as an invalid resource, black; a scene refuses
+        it)."""
         from mdl import ast as A
         from render.library.resources import find_texture
 
@@ -52,9 +53,10 @@ class Backend:
             if not isinstance(name, str) or not isinstance(name_node, A.Node) or \
                     find_texture(name, base) is not None:
                 continue
+            what = "texture" if str(call.type) == "texture_2d" else str(call.type)
             d = module.source.diagnostic(
-                "warning", f"texture {name!r} not found beside the module or on the texture "
-                "path: MDL reads it as an invalid texture (black), a scene refuses it",
+                "warning", f"{what} {name!r} not found beside the module or on the texture "
+                f"path: MDL reads it as an invalid {what} (black), a scene refuses it",
                 name_node.span.start, name_node.span.end,
                 f"put {name} beside the module (or beside the scene that uses it)")
             if (d.loc.line, d.loc.col) not in known:

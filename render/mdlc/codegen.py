@@ -47,7 +47,10 @@ from mdl.entities import (
     SizeName,
 )
 
-__all__ = ["ModuleGen", "CodegenError", "lane_expression_source"]
+__all__ = ["ModuleGen", "CodegenError", "lane_expression_source", "RESOURCES"]
+
+#: the resources the workbench reads (``texture_2d("f.png")``, ``bsdf_measurement("f.mbsdf")``)
+RESOURCES = ("texture_2d", "bsdf_measurement")
 
 _BINOPS = {"+": "LN.add", "-": "LN.sub", "*": "LN.mul", "/": "LN.div", "%": "LN.mod",
            "==": "LN.eq", "!=": "LN.ne", "<": "LN.lt", "<=": "LN.le", ">": "LN.gt",
@@ -876,9 +879,10 @@ class _FunctionGen:
             name_node, gamma_node = call.args
             if name_node is None:
                 return "None"
-            if str(call.type) != "texture_2d":
+            if str(call.type) not in RESOURCES:
                 raise CodegenError(f"{call.type} resources are not supported by the workbench "
-                                   "(2D textures only)", e, "use a texture_2d")
+                                   "(2D textures and measured BSDFs only)", e,
+                                   "use a texture_2d")
             name = self.info(name_node).const
             gamma = None
             if gamma_node is not None:

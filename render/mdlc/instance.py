@@ -37,7 +37,7 @@ from mdl.checker import Checker, is_material_level
 from mdl.entities import AUTO, UNIFORM, ConstEntity, EnumValueEntity, Local, Overload
 from render.mdlc import compiler
 from render.mdlc.knots import merge_knots
-from render.mdlc.natives import native_value
+from render.mdlc.natives import df_key, native_value
 
 __all__ = ["Const", "Vary", "MaterialInstanceError", "Instantiator", "to_core"]
 
@@ -213,7 +213,7 @@ class Instantiator:
                     from render.materials.chapter6 import fresnel_layer_of
 
                     return fresnel_layer_of(**kwargs)  # MDL before 1.4
-                return getattr(df, o.name)(**kwargs)
+                return getattr(df, df_key(o))(**kwargs)  # the overload the checker chose
             if kind == "materials":
                 from render.materials import MATERIALS
 

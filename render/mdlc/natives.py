@@ -42,8 +42,8 @@ from mdl import types as T
 from mdl.loader import ModuleText
 
 __all__ = ["WorkbenchModules", "bind_native", "LIBRARY_DIR", "native_value", "curve_from_lanes",
-           "NATIVE_MODULES", "PROFILE_VALUES", "register_profiles", "SkyFunction",
-           "sun_and_sky_light"]
+           "df_key", "df_module_text", "NATIVE_MODULES", "PROFILE_VALUES", "register_profiles",
+           "SkyFunction", "sun_and_sky_light"]
 
 #: the workbench's MDL library (modules written in MDL for the workbench)
 LIBRARY_DIR = Path(__file__).resolve().parent.parent / "library" / "mdl"
@@ -127,7 +127,7 @@ def _type_text(t, module: str, size: str = "N") -> str:
             spelled = "scatter_mode"
         return q + spelled
     if name.endswith("[]"):
-        return f"{name[:-2]}[<{size}>]"
+        return f"{q}{name[:-2]}[<{size}>]"
     if name == "float3x3":
         return q + "float3x3"
     return q + name
@@ -172,45 +172,83 @@ _FRESNEL_BEFORE_1_4 = (
 
 
 @cache
-def df_module_text() -> str:
-    from render.material import DF_SIGNATURES
+def _df_declarations() -> tuple[str, dict]:
+    """``::df``'s text and which render core constructor each declaration is:
+    ``{(MDL name, overload index): DF_SIGNATURES key}`` (:func:`df_key`).
 
-    out = ["mdl 1.6;", "", "import ::state::*;", "import ::anno::*;", "",
+    Everything comes from :data:`render.material.DF_SIGNATURES` (the ``SIGNATURE`` each
+    df module declares beside its kernels): the component structs from the
+    ``*_component`` signatures, a function per signature under its MDL name
+    (:data:`render.material.MDL_NAMES`: ``tint_rt`` is MDL's two-tint ``tint``), and the
+    mixers' edf and vdf overloads from the component kinds their array parameter takes
+    (:data:`render.material.COMPONENT_KINDS`)."""
+    from render.material import COMPONENT_KINDS, DF_SIGNATURES, MDL_NAMES, _mdl_type_of
+
+    out = ["mdl 1.9;", "", "import ::state::*;", "import ::anno::*;", "",
            "// the distribution functions of the render core (render.df)",
            "export enum scatter_mode { scatter_reflect, scatter_transmit, "
            "scatter_reflect_transmit };", ""]
-    for comp, weight, kind in (("bsdf_component", "float", "bsdf"),
-                               ("color_bsdf_component", "color", "bsdf"),
-                               ("edf_component", "float", "edf"),
-                               ("color_edf_component", "color", "edf")):
-        zero = "0.0" if weight == "float" else "color(0.0)"
-        out.append(f"export struct {comp} {{ {weight} weight = {zero}; {kind} component = "
-                   f"{kind}(); }};")
-    out.append("")
-    for name, (kind, params) in DF_SIGNATURES.items():
-        if name.endswith("_component"):
-            continue
-        ps = []
-        for p, t, d in params:
-            from render.material import _mdl_type_of
+    keys: dict = {}
+    count: dict = {}
 
+    def declare(name: str, key: str, text: str) -> None:
+        out.append(text)
+        keys[name, count.get(name, 0)] = key
+        count[name] = count.get(name, 0) + 1
+
+    for name, (kind, params) in DF_SIGNATURES.items():
+        if kind != name:  # a struct: its signature's kind is its name
+            continue
+        fields = []
+        for p, t, d in params:
+            mt = _mdl_type_of(t)
+            dt = f"{mt.name}()" if d is None else _default_text(d, mt, _prefixes("::df"))
+            fields.append(f"{_type_text(mt, '::df')} {p} = {dt};")
+        out.append(f"export struct {name} {{ {' '.join(fields)} }};")
+    out.append("")
+    for key, (kind, params) in DF_SIGNATURES.items():
+        if kind == key:
+            continue
+        name = MDL_NAMES.get(key, key)
+        ps = []
+        names = [x for x, _, _ in params]
+        for p, t, d in params:
             mt = _mdl_type_of(t)
             text = f"{_type_text(mt, '::df')} {p}"
-            dt = _default_text(d, mt, _prefixes("::df")) if not (
-                isinstance(d, str) and d in [x for x, _, _ in params]) else d
-            if d is None and mt.name in ("bsdf", "edf", "vdf"):
+            if isinstance(d, str) and d in names:
+                dt = d
+            elif d is None and mt.name in ("bsdf", "edf", "vdf"):
                 dt = f"{mt.name}()"
+            else:
+                dt = _default_text(d, mt, _prefixes("::df"))
             if dt is not None:
-                text += f" = {dt}"
+                text += f" = {dt.removeprefix('df::')}"  # ::df's own names, unqualified
             ps.append(text)
-        out.append(f"export {kind} {name}({', '.join(ps)});")
-        if name == "fresnel_layer":
-            out.append(_FRESNEL_BEFORE_1_4)
-        if name in ("normalized_mix", "clamped_mix", "color_normalized_mix",
-                    "color_clamped_mix"):
-            comp = "color_edf_component" if name.startswith("color_") else "edf_component"
-            out.append(f"export edf {name}({comp}[<N>] components);")
-    return "\n".join(out) + "\n"
+        declare(name, key, f"export {kind} {name}({', '.join(ps)});")
+        if key == "fresnel_layer":
+            declare(name, key, _FRESNEL_BEFORE_1_4)
+        arrays = [(p, _mdl_type_of(t).name[:-2]) for p, t, _ in params
+                  if _mdl_type_of(t).name[:-2] in COMPONENT_KINDS]
+        if len(params) == 1 and arrays:  # a mixer: its edf and vdf overloads
+            p, element = arrays[0]
+            for comp in COMPONENT_KINDS[element][1:]:
+                fields = {f: _mdl_type_of(t).name for f, t, _ in DF_SIGNATURES[comp][1]}
+                declare(name, key, f"export {fields['component']} {name}({comp}[<N>] {p});")
+    return "\n".join(out) + "\n", keys
+
+
+def df_module_text() -> str:
+    """The MDL text of ``::df`` (see :func:`_df_declarations`)."""
+    return _df_declarations()[0]
+
+
+def df_key(overload) -> str:
+    """The :data:`render.material.DF_SIGNATURES` key (the constructor in
+    :data:`render.material.df`) of an overload of ``::df`` the front end chose (a
+    component struct's constructor: the struct's name)."""
+    if overload.kind == "struct":
+        return overload.name
+    return _df_declarations()[1][overload.name, overload.index]
 
 
 @cache
