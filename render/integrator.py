@@ -375,15 +375,25 @@ class Integrator:
         kern.hit_attributes(self.geo.packed, self.geo.faces, self.geo.face_normal, face, b1, b2, a)
         return a[:, 0:3], a[:, 3:6], a[:, 6:9], a[:, 9:12], a[:, 12:14]
 
-    def _object_state(self, k: int, p, ns, tu, tv, uv):
-        """The object-space ShadingState of lanes of object ``k`` from world attributes."""
+    def _object_state(self, k: int, p, ns, tu, tv, uv, face, d):
+        """The object-space ShadingState of lanes of object ``k`` from world attributes.
+
+        ``face`` (n,): the triangles hit, whose geometric normals (on the side of the
+        shading normals, :attr:`render.scene.Geometry.face_normal`) are
+        ``state::geometry_normal()``; ``d`` (n, 3): the world directions of the rays
+        that arrived, toward the surface (``state::direction()``).  Both, like every
+        field, in object space and unit; ``state::object_id()`` is ``k``."""
         from displacement.state import ShadingState
 
         obj = self.objects[k]
-        if self.rigid_identity[k]:
-            return ShadingState(p - obj.translation, ns, uv, tu, tv, obj.transform)
+        ng = self.geo.face_normal[face]
+        if self.rigid_identity[k]:  # the kernels' rays are unit
+            return ShadingState(p - obj.translation, ns, uv, tu, tv, obj.transform,
+                                geometry_normal=ng, direction=d, object_id=int(k))
         return ShadingState(obj.to_object_points(p), obj.to_object_normals(ns), uv,
-                            obj.to_object_vectors(tu), obj.to_object_vectors(tv), obj.transform)
+                            obj.to_object_vectors(tu), obj.to_object_vectors(tv), obj.transform,
+                            geometry_normal=obj.to_object_normals(ng),
+                            direction=obj.to_object_vectors(d), object_id=int(k))
 
     def _shade(self, k: int, state, front: np.ndarray, ior_outside=None):
         """``material.shade`` of lanes of object ``k`` (all on one side for two-faced
@@ -443,7 +453,7 @@ class Integrator:
 
         def emission(face, bary, wo_world):
             p, ns, tu, tv, uv = self._attributes(face, bary[:, 1], bary[:, 2])
-            state = self._object_state(k, p, ns, tu, tv, uv)
+            state = self._object_state(k, p, ns, tu, tv, uv, face, -wo_world)
             front = dot(wo_world, self.geo.face_normal[face]) > 0
             out = np.zeros((len(face), 3))
             sides = (front, ~front) if self.two_faced[k] else (np.ones(len(face), dtype=bool),)
@@ -494,7 +504,7 @@ class Integrator:
             sel = np.flatnonzero(need & (objs == k))
             f = face[sel]
             p, ns, tu, tv, uv = self._attributes(f, b1[sel], b2[sel])
-            state = self._object_state(k, p, ns, tu, tv, uv)
+            state = self._object_state(k, p, ns, tu, tv, uv, f, d[sel])
             front = dot(-d[sel], self.geo.face_normal[f]) > 0
             sides = (front, ~front) if self.two_faced[k] else (np.ones(len(sel), dtype=bool),)
             for side in sides:
