@@ -268,11 +268,11 @@ def find_texture(file: str, base_dir=None) -> Path | None:
 
 def _searched(base_dir) -> tuple[Path, ...]:
     """The folders a resource is looked for in: ``base_dir`` (one or several, None
-    skipped), then the texture search path."""
+    skipped), then the texture search path; each once, in that order."""
     bases = () if base_dir is None else tuple(
         d for d in ([base_dir] if isinstance(base_dir, str | os.PathLike) else base_dir)
         if d is not None)
-    return _as_dirs(bases) + texture_dirs()
+    return tuple(dict.fromkeys(_as_dirs(bases) + texture_dirs()))
 
 
 def load_texture(file: str, gamma: str = "linear", base_dir=None) -> Texture:
