@@ -247,16 +247,17 @@ def _importance(lights, mode, j, px, py, pz, nx, ny, nz):
                                                 lights[j, L_DIR + 1], lights[j, L_DIR + 2]))
         if not falloff > 0.0:
             return 0.0
-        return falloff * _bound_importance(lights, j, intensity, px, py, pz, nx, ny, nz, False)
-    return _bound_importance(lights, j, intensity, px, py, pz, nx, ny, nz, kind == AREA)
+        return falloff * _bound_importance(lights, j, intensity, px, py, pz, nx, ny, nz)
+    return _bound_importance(lights, j, intensity, px, py, pz, nx, ny, nz)
 
 
 @njit
-def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
+def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz):
     """The contribution bound of :func:`_importance` for row ``j`` of ``lb`` (a light or
     a node of the light tree): ``intensity`` / d^2 from its bounding sphere, times the
-    emitter's cosine bounded by its emission cone (``cone`` and the row has one) and
-    sphere, times the receiver's cosine bounded the same way."""
+    emitter's cosine bounded by its emission cone (where the row has one: area lights of
+    constant emission and the tree's nodes over them) and sphere, times the receiver's
+    cosine bounded the same way."""
     vx, vy, vz = px - lb[j, LB_C], py - lb[j, LB_C + 1], pz - lb[j, LB_C + 2]
     r = lb[j, LB_R]
     d2 = vx * vx + vy * vy + vz * vz
@@ -267,7 +268,7 @@ def _bound_importance(lb, j, intensity, px, py, pz, nx, ny, nz, cone):
     sin_b = 1.0 if inside else min(r / math.sqrt(d2), 1.0)
     cos_b = math.sqrt(max(1.0 - sin_b * sin_b, 0.0))
     cos_e = 1.0
-    if cone and not inside and lb[j, LB_COS] > -1.0:
+    if not inside and lb[j, LB_COS] > -1.0:
         # cos theta', theta' = max(0, theta_w - theta_o - theta_b): 0 (p behind) below
         # -1e-6, a margin for rounding
         cw = min(max(_dot(wx, wy, wz, lb[j, LB_AXIS], lb[j, LB_AXIS + 1], lb[j, LB_AXIS + 2]),
@@ -308,7 +309,7 @@ def _weight(lights, n_lights, mode, x, px, py, pz, nx, ny, nz):
         return min(lights[x, LB_PHI], MAX_IMPORTANCE)
     if not lights[x, LB_I] > 0.0:
         return 0.0
-    return _bound_importance(lights, x, lights[x, LB_I], px, py, pz, nx, ny, nz, True)
+    return _bound_importance(lights, x, lights[x, LB_I], px, py, pz, nx, ny, nz)
 
 
 @njit(inline="always")

@@ -361,9 +361,11 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     medium, phase, face_offset = tb.medium, tb.phase, tb.face_offset
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
-    n_park = 0
-    n_shadow = 0
-    rays = 0
+    # counters as int64, not literal 0s: a literal argument is a type of its own, and
+    # numba would compile the functions they are passed to once more for it
+    n_park = np.int64(0)
+    n_shadow = np.int64(0)
+    rays = np.int64(0)
     for i in range(n):
         if resume:
             lane = li[i, ID]
@@ -410,7 +412,7 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 f = -1
                 if h[4] != embree.MISS:
                     f = face_offset[h[4]] + h[3]
-                    hb1, hb2, t_hit = h[1], h[2], h[0]
+                    hb1, hb2, t_hit = np.float64(h[1]), np.float64(h[2]), np.float64(h[0])
                     if may_bind and _needs_binding(obj_flags[face_object[f]], cso, csior, nstk,
                                                    face_object[f]):
                         _park(plf, pli, pso, psior, n_park, cso, csior, lane, ox, oy, oz, dx,
@@ -550,9 +552,9 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 encloses = (flags & ENCLOSES) != 0
             # ---- next-event estimation: the selected light, then every delta light
             u_choice, u_lobe = sample_pair(v1, ph, idx, pair0 + P_CHOICE, kind)
-            prepared = False
+            prepared = interpreter.UNPREPARED
             total = 0.0
-            jd = -1
+            jd = np.int64(-1)  # not a literal (one compiled next_delta)
             ul1 = ul2 = 0.0
             if can_continue:
                 ul1, ul2 = sample_pair(v1, ph, idx, pair0 + P_LIGHT, kind)
@@ -837,7 +839,8 @@ def _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslo
         woz = -_dot(dx, dy, dz, nx, ny, nz)
         wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
             tb.code, tb.kids, tb.frames, params, tb.chat, row, ws, roots[slot],
-            tb.frame_lo[slot], tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0)
+            tb.frame_lo[slot], tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0,
+            interpreter.UNPREPARED)
         wx = wix * sx + wiy * qx + wiz * nx
         wy = wix * sy + wiy * qy + wiz * ny
         wz = wix * sz + wiy * qz + wiz * nz
