@@ -1095,6 +1095,7 @@ class material:  # noqa: N801
 
         # which surface: the backface only for thin-walled materials that set one
         surface = self.surface
+        back_side = False
         use_backface = self.thin_walled and not self.backface.is_default
         if use_backface and n and not np.all(front):
             if np.any(front):
@@ -1103,6 +1104,7 @@ class material:  # noqa: N801
                     "separately for front lanes and back lanes"
                 )
             surface = self.backface
+            back_side = True
 
         ior = evaluate(self.ior, shading_state, "color", "material.ior")
         if np.any(ior <= 0.0):
@@ -1125,8 +1127,11 @@ class material:  # noqa: N801
             if not use_backface:
                 intensity[~front] = 0.0  # surface.emission is front side only
             if np.any(intensity != 0.0):
-                # object space -> local frame (spot_edf, also inside edf mixes)
-                context["object_to_local"] = np.stack([frame.s, frame.t, frame.n], axis=1)
+                # object space -> local frame (spot_edf, also inside edf mixes); a
+                # backface's edf emits from the back: its frame is turned over
+                turn = -1.0 if back_side else 1.0
+                context["object_to_local"] = np.stack([frame.s, frame.t, turn * frame.n],
+                                                      axis=1)
                 edf = emission.emission.bind(shading_state, **context)
         return Shading(bsdf=bsdf, edf=edf, intensity=intensity, mode=emission.mode,
                        normal=normal, cutout_opacity=opacity, frame=frame,

@@ -73,7 +73,6 @@ from render.bsdf import (
 )
 from render.df import _kernel_common as kc
 from render.df._albedo import lane_table_albedo, lane_table_average
-from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.df._signature import (
     MODE_MASK,
     REFLECT,
@@ -83,6 +82,7 @@ from render.df._signature import (
     Param,
     Signature,
 )
+from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
 
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
