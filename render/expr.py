@@ -632,6 +632,7 @@ _STRUCT_SIGNATURES: dict[str, tuple[Callable, list[MdlParam], MdlType]] = {
         MdlParam("scattering", _t("vdf"), False),
         MdlParam("absorption_coefficient", MdlType("color"), False),
         MdlParam("scattering_coefficient", MdlType("color"), False),
+        MdlParam("emission_intensity", MdlType("color"), False),
     ], _t("material_volume")),
     "material_geometry": (material_geometry, [
         MdlParam("displacement", MdlType("float3"), False),

@@ -74,7 +74,6 @@ import numpy as np
 
 from render import embree
 from render import path as kern
-from render.df.anisotropic_vdf import SIGNATURE as _PHASE
 from render.film import Film
 from render.frame import Frame, mirror_z
 from render.light_sampling import KINDS, MAX_EVERY_DELTA, light_table
@@ -254,6 +253,7 @@ class Integrator:
                 self.programs[2 * n_obj + 2 * k] = self._edf_program(k, back=False)
                 if self.two_faced[k]:
                     self.programs[2 * n_obj + 2 * k + 1] = self._edf_program(k, back=True)
+        self.programs += [m.phase.program for m in self.media]  # slot 4K + j: medium j's
         #: objects whose programs read the IOR outside them (rebound per lane inside
         #: other objects)
         self.ior_sensitive = np.array(
@@ -377,11 +377,9 @@ class Integrator:
                     # radiance of a diffuse emitter of the same power
                     mean = max(mean, float(_luminance(i)) * _edf_albedo(prog) / np.pi)
                 exitance[k] = mean
-        media = np.zeros((max(len(self.media), 1), 9))
-        phase = np.zeros((max(len(self.media), 1), _PHASE.width))
+        media = np.zeros((max(len(self.media), 1), 12))
         for j, m in enumerate(self.media):
             media[j] = m.row
-            phase[j, _PHASE.offset("directional_bias")] = m.phase.program.P[0, 0]
         lt = light_table(self.lights.lights, len(geo.faces), emission, self._scene_disk(),
                          self.every_delta, self.settings.light_selection, exitance)
         scalars = np.zeros(kern.N_SCALARS)
@@ -412,7 +410,7 @@ class Integrator:
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit,
             np.ascontiguousarray([o.linear.ravel() for o in self.objects]), lt.face_light,
-            media, phase,
+            media,
             lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist,
             self.camera.ray_map, scalars)
         return tables, params

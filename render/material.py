@@ -498,7 +498,7 @@ _SIGNATURE_SOURCES = {
     **{n: (n, "SIGNATURE") for n in (
         "diffuse_reflection_bsdf", "diffuse_transmission_bsdf", "specular_bsdf",
         "simple_glossy_bsdf", "backscattering_glossy_reflection_bsdf", "diffuse_edf",
-        "spot_edf", "anisotropic_vdf", "weighted_layer", "fresnel_layer",
+        "spot_edf", "anisotropic_vdf", "fog_vdf", "weighted_layer", "fresnel_layer",
         "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor",
         "microfacet_ggx_smith_bsdf", "microfacet_beckmann_smith_bsdf",
         "microfacet_ggx_vcavities_bsdf", "microfacet_beckmann_vcavities_bsdf",
@@ -950,7 +950,8 @@ class material_surface:  # noqa: N801
 @dataclass(frozen=True)
 class material_volume:  # noqa: N801
     """``material_volume(vdf scattering = vdf(), color absorption_coefficient = color(),
-    color scattering_coefficient = color())`` (coefficients per meter).
+    color scattering_coefficient = color(), color emission_intensity = color())``
+    (coefficients per meter; ``emission_intensity``, MDL 1.7, in W / (m^3 sr)).
 
     Stored for the integrator's homogeneous media; ``shade`` does not evaluate it.
     """
@@ -958,6 +959,7 @@ class material_volume:  # noqa: N801
     scattering: DfNode | None = None
     absorption_coefficient: Any = (0.0, 0.0, 0.0)
     scattering_coefficient: Any = (0.0, 0.0, 0.0)
+    emission_intensity: Any = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         if self.scattering is not None and not (isinstance(self.scattering, DfNode)
@@ -966,6 +968,7 @@ class material_volume:  # noqa: N801
                 f"material_volume.scattering must be a vdf node or None, got {self.scattering!r}")
         _check_color_field(self.absorption_coefficient, "material_volume.absorption_coefficient")
         _check_color_field(self.scattering_coefficient, "material_volume.scattering_coefficient")
+        _check_color_field(self.emission_intensity, "material_volume.emission_intensity")
 
 
 @dataclass(frozen=True)

@@ -38,8 +38,6 @@ from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.camera import camera_ray
 from render.df._kernel_common import unitize
-from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
-from render.df.anisotropic_vdf import sample as _phase_sample
 from render.df.spot_edf import SIGNATURE as _SPOT
 from render.jit import njit
 from render.light_sampling import (
@@ -70,6 +68,7 @@ from render.sampler import (
     sample_pair,
 )
 from render.volume import (
+    emitted,
     free_flight,
     stack_outside_ior,
     stack_pop,
@@ -158,8 +157,7 @@ Tables = namedtuple(
         "emit_hit",
         "obj_linear",  # (k, 9) each object's linear map to world, row-major
         "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
-        "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
-        "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
+        "medium",  # (m, 12) sigma_a, sigma_s, sigma_t, emission per channel
         # the lights (render.light_sampling.light_table): a row per light and per node of
         # the light tree, a row per emissive triangle, an environment map and its texels'
         # (probabilities, cdf), the sun and sky's parameters and (probabilities, cdf)
@@ -375,7 +373,8 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
-    medium, phase, face_offset = tb.medium, tb.phase, tb.face_offset
+    medium, face_offset = tb.medium, tb.face_offset
+    phase0 = 4 * len(tb.obj_flags)  # the media's phase functions' slots
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
     n_park = 0
@@ -459,6 +458,12 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
             if med >= 0:
                 u_flight, u_roulette = sample_pair(v1, ph, idx, pair0 + P_FLIGHT, kind)
                 length = t_hit + shift
+                if medium[med, 9] > 0.0 or medium[med, 10] > 0.0 or medium[med, 11] > 0.0:
+                    # the medium's emission along the whole segment, in closed form
+                    w = 1.0 / ((r0 + r1 + r2) / 3.0)
+                    L[lane, 0] += b0 * emitted(medium, med, 0, length) * w
+                    L[lane, 1] += b1 * emitted(medium, med, 1, length) * w
+                    L[lane, 2] += b2 * emitted(medium, med, 2, length) * w
                 scattered, tt, w0, w1, w2, p0, p1, p2 = free_flight(medium, med, hero, u_flight,
                                                                     length)
                 if scattered:
@@ -477,7 +482,9 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                     break
                 nx = ny = nz = gx = gy = gz = sx = sy = sz = qx = qy = qz = 0.0
                 wox, woy, woz = -dx, -dy, -dz  # world directions at a medium vertex
-                k, row, root, f_lo, f_hi, entry_ior, g_wo, dist_v = -1, 0, -1, 0, 0, 1.0, 0.0, 0.0
+                k, entry_ior, g_wo, dist_v = -1, 1.0, 0.0, 0.0
+                row = phase0 + med  # the phase function's program
+                root, f_lo, f_hi = roots[row], frame_lo[row], frame_hi[row]
                 can_continue, is_null, encloses, front = True, False, False, True
             elif f < 0:
                 # ---- escaped: the environment, weighted against light sampling
@@ -595,7 +602,10 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                     l0, l1, l2, lface = l0 * le0, l1 * le1, l2 * le2, -1
                 across = False
                 if scattered:
-                    f0, f1, f2, pb = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz, lx, ly, lz)
+                    f0, f1, f2, pb = interpreter.eval_pdf(
+                        code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy,
+                        woz, lx, ly, lz)
+                    prepared = True
                 else:
                     wlz = _dot(lx, ly, lz, nx, ny, nz)
                     g_wi = _dot(lx, ly, lz, gx, gy, gz)
@@ -628,9 +638,10 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
             ub1, ub2 = sample_pair(v1, ph, idx, pair0 + P_BSDF, kind)
             straight = False
             if scattered:
-                nx2, ny2, nz2, pdf, w0, w1, w2, lobe = _phase_sample(
-                    phase, med, 0, 0, wox, woy, woz, u_lobe, ub1, ub2)
-                if lobe == 0:
+                nx2, ny2, nz2, pdf, w0, w1, w2, lobe = interpreter.sample(
+                    code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
+                    u_lobe, ub1, ub2, prepared)
+                if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
                     break
                 g_new = 0.0
             else:

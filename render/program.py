@@ -108,7 +108,8 @@ ALBEDO_POINTS = 89
     O_MEASURED_BSDF,
     O_MICROFLAKE_SHEEN,
     O_CHIANG_HAIR,
-) = range(18, 28)
+    O_FOG_VDF,
+) = range(18, 29)
 O_LEAF_LO, O_LEAF_HI = 18, 29
 # combiners added later
 (

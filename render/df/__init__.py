@@ -245,5 +245,6 @@ __all__ = [
 
 # volumes (render.volume uses it as the phase function of homogeneous media)
 from render.df.anisotropic_vdf import AnisotropicVdf, anisotropic_vdf  # noqa: E402
+from render.df.fog_vdf import FogVdf, fog_vdf  # noqa: E402
 
-__all__ += ["AnisotropicVdf", "anisotropic_vdf"]
+__all__ += ["AnisotropicVdf", "anisotropic_vdf", "FogVdf", "fog_vdf"]
