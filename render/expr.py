@@ -606,7 +606,7 @@ _ARRAY_COMPATIBLE = {"bsdf_component[]": ("edf_component[]", "vdf_component[]"),
                                                 "color_vdf_component[]")}
 _VECTOR_WIDTH = {"float2": 2, "float3": 3, "color": 3}
 _CONSTRUCTORS = ("float2", "float3", "color", "float", "int", "texture_2d", "bsdf_measurement",
-                 "material",
+                 "light_profile", "float3x3", "material",
                  "material_surface", "material_emission", "material_volume", "material_geometry")
 
 _F, _UF = MdlType("float"), MdlType("float", True)
@@ -952,6 +952,8 @@ class _Evaluator:
             return self.texture(node)
         if name == "bsdf_measurement":
             return self.measurement(node)
+        if name == "light_profile":
+            return self.light_profile(node)
         for argument in node.arguments:
             if argument.name is not None:
                 raise self.error(f"{name}(...) takes positional arguments only",
@@ -963,7 +965,54 @@ class _Evaluator:
                 raise self.error(f"{name}(...) takes one constant number", node.offset)
             x = values[0][1].value
             return Value(float(x), _t("float")) if name == "float" else Value(int(x), _t("int"))
+        if name == "float3x3":
+            return self.matrix(node, values)
         return self.vector(node, name, values)
+
+    def matrix(self, node: Call, values: list[tuple[Argument, Value]]) -> Value:
+        """MDL's ``float3x3``: ``float3x3(s)`` (``s`` on the diagonal), three ``float3``
+        columns, or nine numbers in column-major order; the value is the matrix's rows
+        (``M[i][j]``, row-major), uniform."""
+        fix = ("write float3x3(1.0), float3x3(float3(...), float3(...), float3(...)) (its "
+               "columns) or nine numbers, column by column")
+        for argument, v in values:
+            if v.varying:
+                raise self.error("float3x3(...) takes constants", argument.value.offset,
+                                 "matrices here are uniform: pass numbers")
+        kinds = [v.type.name for _, v in values]
+        if len(values) == 1 and kinds[0] in ("int", "float"):
+            x = float(values[0][1].value)
+            m = [[x if i == j else 0.0 for j in range(3)] for i in range(3)]
+        elif len(values) == 3 and all(k == "float3" for k in kinds):
+            cols = [v.value for _, v in values]
+            m = [[float(cols[j][i]) for j in range(3)] for i in range(3)]
+        elif len(values) == 9 and all(k in ("int", "float") for k in kinds):
+            x = [float(v.value) for _, v in values]
+            m = [[x[3 * j + i] for j in range(3)] for i in range(3)]
+        else:
+            raise self.error(f"float3x3(...) cannot take ({', '.join(kinds) or 'nothing'})",
+                             node.offset, fix)
+        return Value(tuple(tuple(r) for r in m), MdlType("float3x3", True))
+
+    def light_profile(self, node: Call) -> Value:
+        """``light_profile("file.ies")``: an IES LM-63 file read relative to ``base_dir``
+        (a scene's directory) or as given."""
+        from render.df._ies import IesError, read_ies
+
+        params = [MdlParam("name", MdlType("string", True), True, "")]
+        kwargs = self.bind(node, params)
+        file = kwargs["name"]
+        path = Path(file)
+        if not path.is_absolute() and self.base_dir is not None:
+            near = Path(self.base_dir) / path
+            path = near if near.exists() else path
+        if not path.exists():
+            raise self.error(f"light_profile: no file {file!r}", node.arguments[0].value.offset,
+                             "give the IES file's path, relative to the scene file")
+        try:
+            return Value(read_ies(path), MdlType("light_profile", True))
+        except IesError as e:
+            raise self.error(str(e), node.arguments[0].value.offset) from None
 
     def vector(self, node: Call, name: str, values: list[tuple[Argument, Value]]) -> Value:
         width = _VECTOR_WIDTH[name]

@@ -388,6 +388,13 @@ def _check_constant(value: Any, t: MdlType, where: str) -> Any:
             raise ValueError(f"{where} must be a bsdf_measurement, e.g. "
                              f"bsdf_measurement(\"paint.mbsdf\"), got {value!r}")
         return value
+    if t.name == "light_profile":
+        from render.df._ies import LightProfile
+
+        if not isinstance(value, LightProfile):
+            raise ValueError(f"{where} must be a light_profile, e.g. "
+                             f"light_profile(\"lamp.ies\"), got {value!r}")
+        return value
     if t.name in ("color[]", "float[]"):
         if callable(value) or any(callable(v) for v in np.atleast_1d(
                 np.asarray(value, dtype=object)).ravel()):
@@ -485,6 +492,7 @@ _PARAM_TYPES = {
     ("bsdf", False): BsdfArg, ("edf", False): EdfArg, ("vdf", False): VdfArg,
     ("color[]", True): UniformColorArray,
     ("bsdf_measurement", True): UniformBsdfMeasurement,
+    ("light_profile", True): Annotated[Any, MdlType("light_profile", True)],
     ("texture_2d", True): Texture2D,
     ("float2", False): Float2,
     ("bsdf_component[]", False): BsdfComponents,
@@ -498,7 +506,7 @@ _SIGNATURE_SOURCES = {
     **{n: (n, "SIGNATURE") for n in (
         "diffuse_reflection_bsdf", "diffuse_transmission_bsdf", "specular_bsdf",
         "simple_glossy_bsdf", "backscattering_glossy_reflection_bsdf", "diffuse_edf",
-        "spot_edf", "anisotropic_vdf", "fog_vdf", "weighted_layer", "fresnel_layer",
+        "spot_edf", "measured_edf", "anisotropic_vdf", "fog_vdf", "weighted_layer", "fresnel_layer",
         "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor",
         "microfacet_ggx_smith_bsdf", "microfacet_beckmann_smith_bsdf",
         "microfacet_ggx_vcavities_bsdf", "microfacet_beckmann_vcavities_bsdf",

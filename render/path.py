@@ -38,6 +38,7 @@ from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.camera import camera_ray
 from render.df._kernel_common import unitize
+from render.df.measured_edf import O2L as MEASURED_O2L
 from render.df.spot_edf import SIGNATURE as _SPOT
 from render.jit import njit
 from render.light_sampling import (
@@ -52,7 +53,7 @@ from render.light_sampling import (
     selection_pdf,
 )
 from render.lights import INFINITE_DISTANCE
-from render.program import BASE, O_SPOT_EDF, OP, SIZE
+from render.program import BASE, O_MEASURED_EDF, O_SPOT_EDF, OP, SIZE
 from render.sampler import (
     CAMERA_PAIR,
     FIRST_SEGMENT_PAIR,
@@ -125,7 +126,7 @@ NA = 10
 CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8, 16, 32, 64
 EMIT_PROG, EMIT_GLOBAL = 128, 256
 #: the edfs whose lobe may be fixed in object space (``object_to_local_ij`` context slots)
-OBJECT_EDFS = np.array([O_SPOT_EDF])
+OBJECT_EDFS = np.array([O_SPOT_EDF, O_MEASURED_EDF])
 #: one Embree call in this many is timed (the share of time inside Embree)
 TIMED_EVERY = 16
 
@@ -720,9 +721,12 @@ def _emission(tb, params, ws, ep, k, back, sx, sy, sz, qx, qy, qz, nx, ny, nz, w
         for c in range(params.shape[1]):
             ep[0, c] = params[slot, c]
         for node in range(root - code[root, SIZE] + 1, root + 1):
-            if code[node, OP] != O_SPOT_EDF:
+            if code[node, OP] == O_SPOT_EDF:
+                o = code[node, BASE] + SPOT_O2L
+            elif code[node, OP] == O_MEASURED_EDF:
+                o = code[node, BASE] + MEASURED_O2L
+            else:
                 continue
-            o = code[node, BASE] + SPOT_O2L
             for i in range(3):
                 if i == 0:
                     rx, ry, rz = sx, sy, sz
