@@ -319,6 +319,7 @@ export struct material_volume {
     vdf scattering = vdf();
     color absorption_coefficient = color(0.0);
     color scattering_coefficient = color(0.0);
+    color emission_intensity = color(0.0);
 };
 
 export struct material_geometry {

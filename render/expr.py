@@ -27,7 +27,9 @@ Everything MDL allows in an expression works: arithmetic (``spread_factor * math
 (``df::bsdf_component[](...)``).  Enum values are written as names (``mode: object``), not
 strings; ``texture_2d("f.png")`` decodes as MDL's ``tex::gamma_default`` says (8- and 16-bit
 images as sRGB, EXR linear): write ``texture_2d("f.png", tex::gamma_linear)`` for data.
-Textures and ``bsdf_measurement("f.mbsdf")`` files are found in ``base_dir`` first.  A df
+Textures, ``bsdf_measurement("f.mbsdf")`` and ``light_profile("f.ies")`` files are found in
+``base_dir`` first.  ``float3x3(...)`` takes MDL's columns (``df::spot_edf``'s and
+``df::measured_edf``'s ``global_frame``); the df receives its rows, ``M[i][j]``.  A df
 name with several MDL overloads (``df::tint`` of a bsdf with one or two tints, of an edf,
 of a vdf; the mixers of bsdf, edf or vdf components) takes the overload MDL's rules choose
 from the arguments.

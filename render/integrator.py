@@ -74,14 +74,13 @@ import numpy as np
 
 from render import embree
 from render import path as kern
-from render.df.anisotropic_vdf import SIGNATURE as _PHASE
 from render.film import Film
 from render.frame import Frame, mirror_z
 from render.light_sampling import KINDS, MAX_EVERY_DELTA, light_table
 from render.lights import AreaLight, LightSet
 from render.numerics import dot
 from render.passes import CHUNK, PASS_SAMPLES, PassPlan, render_chunk  # noqa: F401 (re-export)
-from render.program import ProgramTable
+from render.program import OP, ProgramTable
 from render.sampler import SAMPLERS, SOBOL_TABLE
 from render.volume import MAX_NESTING, is_closed, medium_of
 
@@ -233,15 +232,28 @@ class Integrator:
         self.rigid_identity = np.array([np.array_equal(o.linear, np.eye(3))
                                         for o in self.objects])
         const_emit = [_constant_diffuse_emission(m) for m in mats]
+        #: emitters whose edf and intensity are constant: their edf programs run in the
+        #: kernel (the constant diffuse ones by the shortcut EMIT_CONST)
+        self.emit_program = np.array([const_emit[k] is None and _constant_edf(m)
+                                      for k, m in enumerate(mats)], dtype=bool)
         #: objects shaded per lane with numpy (varying arguments or emission)
-        self.bound = np.array([_varying(m) or (_is_emissive(m) and const_emit[k] is None)
+        self.bound = np.array([_varying(m) or (_is_emissive(m) and const_emit[k] is None
+                                               and not self.emit_program[k])
                                for k, m in enumerate(mats)], dtype=bool)
-        self.programs = [None] * (2 * n_obj)
+        self.emit_program &= ~self.bound
+        # the program slots: bsdfs (2k front, 2k + 1 back), then edfs (EDF_SLOTS + 2k,
+        # + 1), then the media's phase functions (after both)
+        self.programs = [None] * (4 * n_obj)
         for k in range(n_obj):
             if not self.bound[k]:
                 self.programs[2 * k] = self._constant_program(k, back=False)
                 if self.two_faced[k]:  # slot 2k + 1 is read for two-faced objects only
                     self.programs[2 * k + 1] = self._constant_program(k, back=True)
+            if self.emit_program[k]:
+                self.programs[2 * n_obj + 2 * k] = self._edf_program(k, back=False)
+                if self.two_faced[k]:
+                    self.programs[2 * n_obj + 2 * k + 1] = self._edf_program(k, back=True)
+        self.programs += [m.phase.program for m in self.media]  # slot 4K + j: medium j's
         #: objects whose programs read the IOR outside them (rebound per lane inside
         #: other objects)
         self.ior_sensitive = np.array(
@@ -274,6 +286,24 @@ class Integrator:
         return node.bind(state, ior_outside=1.0, ior_inside=float(np.mean(mat.ior)),
                          thin_walled=bool(mat.thin_walled)).program
 
+    def _edf_program(self, k: int, back: bool):
+        """Object ``k``'s edf program (front surface, or a thin-walled backface), one
+        parameter row (None: no emission).  A global ``spot_edf`` or ``measured_edf``
+        is bound with the identity for ``object_to_local``: the kernel writes each
+        hit's rotation into a copy of the row (:func:`render.path._emission`)."""
+        from displacement.state import ShadingState
+
+        mat = self.objects[k].material
+        emission = (mat.backface if back else mat.surface).emission
+        if emission.is_black:
+            return None
+        one = np.array([[0.0, 0.0, 1.0]])
+        state = ShadingState(np.zeros((1, 3)), one, np.zeros((1, 2)), np.array([[1.0, 0.0, 0.0]]),
+                             np.array([[0.0, 1.0, 0.0]]), self.objects[k].transform)
+        return emission.emission.bind(state, ior_outside=1.0, ior_inside=float(np.mean(mat.ior)),
+                                      thin_walled=bool(mat.thin_walled),
+                                      object_to_local=np.eye(3)[None]).program
+
     def _reads_outside_ior(self, k: int) -> bool:
         """Whether object ``k``'s constant programs change with the IOR outside it."""
         if not self.encloses.any():
@@ -294,9 +324,11 @@ class Integrator:
     def _tables(self, const_emit, obj_medium):
         geo = self.geo
         n_obj = len(self.objects)
-        emit_hit = np.zeros((n_obj, 3))
+        emit_hit = np.zeros((n_obj, 6))
         #: each emitter's radiance of its light samples (None: it varies over it)
         emission = dict.fromkeys(self.emitters)
+        #: the mean radiance of an edf-program emitter, for its light's bounds
+        exitance = {}
         flags = np.zeros(n_obj, dtype=np.int64)
         flags[self.cutout] |= kern.CUTOUT
         flags[self.null_candidate] |= kern.NULL
@@ -322,15 +354,34 @@ class Integrator:
                 light = self.emitters[k]
                 # edf.eval (1/pi) times the intensity (per area in power mode) on a hit,
                 # intensity / pi (per area) when sampled
-                emit_hit[k] = (intensity / light.area if power else intensity) / np.pi
+                emit_hit[k, :3] = (intensity / light.area if power else intensity) / np.pi
                 emission[k] = radiance / light.area if power else radiance
-        media = np.zeros((max(len(self.media), 1), 9))
-        phase = np.zeros((max(len(self.media), 1), _PHASE.width))
+            elif self.emit_program[k]:
+                flags[k] |= kern.EMIT_PROG
+                slots = self.programs[2 * n_obj + 2 * k:2 * n_obj + 2 * k + 2]
+                if any(p is not None and np.isin(p.code[:, OP], kern.OBJECT_EDFS).any()
+                       for p in slots):
+                    flags[k] |= kern.EMIT_GLOBAL
+                area = self.emitters[k].area
+                sides = (mat.surface, mat.backface) if self.two_faced[k] else (mat.surface,)
+                mean = 0.0
+                for side, (surface, prog) in enumerate(zip(sides, slots, strict=False)):
+                    e = surface.emission
+                    if prog is None or e.is_black:
+                        continue
+                    i = np.broadcast_to(np.asarray(e.intensity, dtype=np.float64), (3,))
+                    if "power" in str(e.mode):
+                        i = i / area
+                    emit_hit[k, 3 * side:3 * side + 3] = i
+                    # intensity times the edf's hemispherical emission over pi: the
+                    # radiance of a diffuse emitter of the same power
+                    mean = max(mean, float(_luminance(i)) * _edf_albedo(prog) / np.pi)
+                exitance[k] = mean
+        media = np.zeros((max(len(self.media), 1), 12))
         for j, m in enumerate(self.media):
             media[j] = m.row
-            phase[j, _PHASE.offset("directional_bias")] = m.phase.program.P[0, 0]
         lt = light_table(self.lights.lights, len(geo.faces), emission, self._scene_disk(),
-                         self.every_delta, self.settings.light_selection)
+                         self.every_delta, self.settings.light_selection, exitance)
         scalars = np.zeros(kern.N_SCALARS)
         scalars[kern.SC_SELECT] = float(lt.mode)
         scalars[kern.SC_LIGHTS] = float(lt.n_lights)
@@ -346,6 +397,7 @@ class Integrator:
         scalars[kern.SC_CAM:kern.SC_CAM + 3] = self.camera.position
         scalars[kern.SC_FWD:kern.SC_FWD + 3] = self.camera.forward
         scalars[kern.SC_WIDTH] = float(self.camera.width)
+        scalars[kern.SC_NCONST] = float(len(self.programs))
         table = ProgramTable(self.programs)
         params = np.zeros((len(self.programs), table.width))
         for s, prog in enumerate(self.programs):
@@ -356,7 +408,9 @@ class Integrator:
             geo.face_offset.astype(np.int64),
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
-            flags, opacity, ior, obj_medium, emit_hit, lt.face_light, media, phase,
+            flags, opacity, ior, obj_medium, emit_hit,
+            np.ascontiguousarray([o.linear.ravel() for o in self.objects]), lt.face_light,
+            media,
             lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist,
             self.camera.ray_map, scalars)
         return tables, params
@@ -568,7 +622,8 @@ class Integrator:
             m, ns = kern.trace(self.scene_handle, tables, m, resume, pixel, index, seed, kind,
                                SOBOL_TABLE, *lanes, lane_row, params, bf, bslot, L, alpha,
                                aov, *parked, *buf.shadows[0], kern.scratch(tables), buf.es,
-                               buf.cso, buf.csior, buf.lw, counts)
+                               buf.cso, buf.csior, buf.lw, np.empty((1, params.shape[1])),
+                               counts)
             if ns:
                 self._shadows(ns, buf, (pixel, index, seed, kind), L, counts)
             if not m:
@@ -632,7 +687,7 @@ class Integrator:
                     sel = deferred[objs == k]
                     le = self.emitters[k].emission(
                         si[sel, kern.S_FACE], sf[sel, kern.S_BARY:kern.S_BARY + 3],
-                        -sf[sel, kern.S_D:kern.S_D + 3])
+                        -sf[sel, kern.S_L:kern.S_L + 3])
                     sf[sel, kern.S_C:kern.S_C + 3] *= le
                 si[deferred, kern.S_FACE] = -1
             tables, params, lane_row, bf, bslot = self._bind(
@@ -757,6 +812,42 @@ def _constant_diffuse_emission(material):
         return None
     intensity = np.broadcast_to(np.asarray(emission.intensity, dtype=np.float64), (3,))
     return intensity / np.pi, "power" in str(getattr(emission, "mode", ""))
+
+
+def _constant_edf(material) -> bool:
+    """Whether an emissive material's emission is the same everywhere on it: constant
+    intensities and edf arguments, no bump, no varying cutout (its edf programs then
+    run in the path kernel, at hits and at light samples)."""
+    if not _is_emissive(material) or material.geometry.normal is not None:
+        return False
+    if callable(getattr(material.geometry, "cutout_opacity", 1.0)):
+        return False
+    for surface in (material.surface, material.backface):
+        emission = surface.emission
+        if emission.emission is None:
+            continue
+        if callable(emission.intensity):
+            return False
+        for n in _df_nodes(emission.emission):
+            if any(callable(value) for value in n.kwargs.values()):
+                return False
+    return True
+
+
+def _edf_albedo(program, samples: int = 4096) -> float:
+    """The luminance of ``∫ edf cos`` over the hemisphere of an edf program (1 for a
+    lone diffuse or spot edf), by its own sampling at Sobol points."""
+    from render.program import ProgramEdf, sobol_points
+
+    u = sobol_points(samples)
+    s = ProgramEdf(program).sample(u[:, 0], u[:, 1:])
+    return float(np.mean(_luminance(np.where(s.pdf[:, None] > 0.0, s.weight, 0.0))))
+
+
+def _luminance(rgb) -> np.ndarray:
+    from render.program import LUM_B, LUM_G, LUM_R
+
+    return np.asarray(rgb, dtype=np.float64) @ np.array([LUM_R, LUM_G, LUM_B])
 
 
 def _has_cutout(material) -> bool:

@@ -55,6 +55,8 @@ from render.df.diffuse_transmission_bsdf import sample as _dt_sample
 from render.df.directional_factor import curve_constant as _df_constant
 from render.df.directional_factor import edf_scale as _dfe_scale
 from render.df.directional_factor import scale as _df_scale
+from render.df.fog_vdf import eval_pdf as _fog_eval_pdf
+from render.df.fog_vdf import sample as _fog_sample
 from render.df.fresnel_factor import scale as _ff_scale
 from render.df.fresnel_layer import curve_constant as _fr_curve_constant
 from render.df.fresnel_layer import curve_h as _fr_curve_h
@@ -73,6 +75,8 @@ from render.df.measured_curve_layer import curve_nk as _mc_curve_nk
 from render.df.measured_curve_layer import layer_estimates as _mc_estimates
 from render.df.measured_curve_layer import layer_factors as _mc_factors
 from render.df.measured_curve_layer import layer_possible as _mc_possible
+from render.df.measured_edf import edf_eval_pdf as _me_eval_pdf
+from render.df.measured_edf import edf_sample as _me_sample
 from render.df.measured_factor import scale as _mf_scale
 from render.df.microfacet_beckmann_smith_bsdf import eval_pdf as _mbs_eval_pdf
 from render.df.microfacet_beckmann_smith_bsdf import sample as _mbs_sample
@@ -134,6 +138,7 @@ from render.program import (
     O_DIFFUSE_TRANSMISSION,
     O_DIRECTIONAL_FACTOR,
     O_DIRECTIONAL_FACTOR_EDF,
+    O_FOG_VDF,
     O_FRESNEL_FACTOR,
     O_FRESNEL_LAYER,
     O_LEAF_HI,
@@ -141,6 +146,7 @@ from render.program import (
     O_MEASURED_BSDF,
     O_MEASURED_CURVE_FACTOR,
     O_MEASURED_CURVE_LAYER,
+    O_MEASURED_EDF,
     O_MEASURED_FACTOR,
     O_MICROFACET_BECKMANN_SMITH,
     O_MICROFACET_BECKMANN_VCAVITIES,
@@ -237,6 +243,8 @@ def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
         return _bg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_FOG_VDF:
+        return _fog_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     return 0.0, 0.0, 0.0, 0.0
 
 
@@ -271,6 +279,8 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
         return _bg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_FOG_VDF:
+        return _fog_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
 
 
@@ -298,7 +308,7 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _dt_albedo(P, row, b, flags, ox, oy, oz)
     if op == O_BACKSCATTERING_GLOSSY:
         return _bg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
-    if op == O_ANISOTROPIC_VDF:
+    if op == O_ANISOTROPIC_VDF or op == O_FOG_VDF:
         return _vdf_albedo(P, row, b, flags, ox, oy, oz)
     return 0.0, 0.0, 0.0
 
@@ -306,7 +316,7 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
 @njit
 def _is_leaf(op):
     return (op <= O_ANISOTROPIC_VDF or op == O_DIFFUSE_EDF or op == O_SPOT_EDF
-            or (op >= O_LEAF_LO and op <= O_LEAF_HI))
+            or (op >= O_LEAF_LO and op <= O_LEAF_HI) or op == O_MEASURED_EDF)
 
 
 @njit
@@ -622,7 +632,7 @@ def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
         fr = fo + code[k, FRAME] * _FR
         wo = ws[fr + _FWO:fr + _FWO + 3]
         if _is_leaf(op):
-            if op == O_DIFFUSE_EDF or op == O_SPOT_EDF:
+            if op == O_DIFFUSE_EDF or op == O_SPOT_EDF or op == O_MEASURED_EDF:
                 ws[r + _CH], ws[r + _CH + 1], ws[r + _CH + 2] = 1.0, 1.0, 1.0
             else:
                 a0, a1, a2 = leaf_albedo(op, P, row, b, fl, wo[0], wo[1], wo[2], tables,
@@ -1083,16 +1093,20 @@ def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy,
 
 # ------------------------------------------------------------------ EDF programs
 @njit
-def _edf_leaf_eval_pdf(op, P, row, b, fl, ox, oy, oz):
+def _edf_leaf_eval_pdf(op, P, row, b, fl, ox, oy, oz, tables, t):
     if op == O_SPOT_EDF:
         return _se_eval_pdf(P, row, b, fl, ox, oy, oz)
+    if op == O_MEASURED_EDF:
+        return _me_eval_pdf(P, row, b, fl, ox, oy, oz, tables, t)
     return _de_eval_pdf(P, row, b, fl, ox, oy, oz)
 
 
 @njit
-def _edf_leaf_sample(op, P, row, b, fl, u1, u2x, u2y):
+def _edf_leaf_sample(op, P, row, b, fl, u1, u2x, u2y, tables, t):
     if op == O_SPOT_EDF:
         return _se_sample(P, row, b, fl, u1, u2x, u2y)
+    if op == O_MEASURED_EDF:
+        return _me_sample(P, row, b, fl, u1, u2x, u2y, tables, t)
     return _de_sample(P, row, b, fl, u1, u2x, u2y)
 
 
@@ -1111,7 +1125,7 @@ def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, o
         v0 = v1 = v2 = pdf = 0.0
         if _is_leaf(op):
             v0, v1, v2, pdf = _edf_leaf_eval_pdf(op, P, row, code[k, BASE], code[k, FLAGS],
-                                                 ox, oy, oz)
+                                                 ox, oy, oz, tables, code[k, TABLE])
         elif _is_edf_scale(op):
             c = kids[code[k, KID0]]
             if c != _NO_KID:
@@ -1190,7 +1204,8 @@ def edf_sample(code, kids, frames, P, tables, row, ws, root, f0, f1, u1, u2x, u2
         if k == _NO_KID:
             return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     wx, wy, wz, pdf, w0, w1, w2 = _edf_leaf_sample(code[k, OP], P, row, code[k, BASE],
-                                                   code[k, FLAGS], u1, u2x, u2y)
+                                                   code[k, FLAGS], u1, u2x, u2y, tables,
+                                                   code[k, TABLE])
     if k == root or not pdf > 0.0:
         return wx, wy, wz, pdf, w0, w1, w2
     e0, e1, e2, pdf = edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1,

@@ -568,7 +568,7 @@ def _luminance(rgb):
 
 
 def light_table(lights, face_count: int, emission: dict, scene_disk: float,
-                every_delta: bool, selection: str) -> LightTable:
+                every_delta: bool, selection: str, exitance: dict | None = None) -> LightTable:
     """The kernels' tables of ``lights`` (a list of :class:`render.lights.Light`).
 
     Parameters
@@ -584,6 +584,10 @@ def light_table(lights, face_count: int, emission: dict, scene_disk: float,
     every_delta : bool
         Delta lights are sampled at every vertex, outside the selection.
     selection : {"uniform", "power", "contribution"}
+    exitance : dict, optional
+        Object id -> the mean radiance (luminance) of an emitter whose emission the
+        path kernel evaluates (an edf program), for its bounds; other emitters whose
+        emission varies are measured at their triangles' centroids.
     """
     n = len(lights)
     table = np.zeros((n, NL))
@@ -632,7 +636,7 @@ def light_table(lights, face_count: int, emission: dict, scene_disk: float,
                 rot = light.rotation
             else:
                 sky, sky_dist = light.kernel_params(), np.vstack([light._p, light._cdf])
-    _bounds(table, lights, scene_disk)
+    _bounds(table, lights, scene_disk, exitance or {})
     # an environment the only light to choose (the rest sampled at every vertex): its
     # importance is the same everywhere, so there is nothing to weigh per vertex
     chosen = [light for light in lights if not (every_delta and light.delta)]
@@ -648,7 +652,7 @@ def light_table(lights, face_count: int, emission: dict, scene_disk: float,
     return out
 
 
-def _bounds(table, lights, disk: float) -> None:
+def _bounds(table, lights, disk: float, exitance: dict) -> None:
     """Each light's bounds (``LB_*``; :func:`_importance`): bounding sphere, emission
     cone, intensity (area lights: mean radiance x area, directional: irradiance;
     luminance) and power (pbrt-v4's ``Light::Phi``: pi L A, 4 pi I, a spot's cone,
@@ -674,6 +678,8 @@ def _bounds(table, lights, disk: float) -> None:
                 row[LB_AXIS:LB_AXIS + 3] = axis
             if const:
                 radiance = float(_luminance(row[L_RAD:L_RAD + 3]))
+            elif light.object_id in exitance:
+                radiance = exitance[light.object_id]
             else:  # varying: its radiance at the triangles' centroids toward their normals
                 third = np.full((len(light.faces), 3), 1.0 / 3.0)
                 rad = _luminance(light.emission(light.faces, third, light.normals))

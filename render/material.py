@@ -391,6 +391,13 @@ def _check_constant(value: Any, t: MdlType, where: str) -> Any:
             raise ValueError(f"{where} must be a bsdf_measurement, e.g. "
                              f"bsdf_measurement(\"paint.mbsdf\"), got {value!r}")
         return value
+    if t.name == "light_profile":
+        from render.df._ies import LightProfile
+
+        if not isinstance(value, LightProfile):
+            raise ValueError(f"{where} must be a light_profile, e.g. "
+                             f"light_profile(\"lamp.ies\"), got {value!r}")
+        return value
     if t.name in ("color[]", "float[]"):
         if callable(value) or any(callable(v) for v in np.atleast_1d(
                 np.asarray(value, dtype=object)).ravel()):
@@ -490,6 +497,7 @@ _PARAM_TYPES = {
     ("bsdf", False): BsdfArg, ("edf", False): EdfArg, ("vdf", False): VdfArg,
     ("color[]", True): UniformColorArray,
     ("bsdf_measurement", True): UniformBsdfMeasurement,
+    ("light_profile", True): Annotated[Any, MdlType("light_profile", True)],
     ("texture_2d", True): Texture2D,
     ("float2", False): Float2,
     ("bsdf_component[]", False): BsdfComponents,
@@ -503,7 +511,7 @@ _SIGNATURE_SOURCES = {
     **{n: (n, "SIGNATURE") for n in (
         "diffuse_reflection_bsdf", "diffuse_transmission_bsdf", "specular_bsdf",
         "simple_glossy_bsdf", "backscattering_glossy_reflection_bsdf", "diffuse_edf",
-        "spot_edf", "anisotropic_vdf", "weighted_layer", "fresnel_layer",
+        "spot_edf", "measured_edf", "anisotropic_vdf", "fog_vdf", "weighted_layer", "fresnel_layer",
         "custom_curve_layer", "normalized_mix", "clamped_mix", "tint", "directional_factor",
         "microfacet_ggx_smith_bsdf", "microfacet_beckmann_smith_bsdf",
         "microfacet_ggx_vcavities_bsdf", "microfacet_beckmann_vcavities_bsdf",
@@ -956,7 +964,8 @@ class material_surface:  # noqa: N801
 @dataclass(frozen=True)
 class material_volume:  # noqa: N801
     """``material_volume(vdf scattering = vdf(), color absorption_coefficient = color(),
-    color scattering_coefficient = color())`` (coefficients per meter).
+    color scattering_coefficient = color(), color emission_intensity = color())``
+    (coefficients per meter; ``emission_intensity``, MDL 1.7, in W / (m^3 sr)).
 
     Stored for the integrator's homogeneous media; ``shade`` does not evaluate it.
     """
@@ -964,6 +973,7 @@ class material_volume:  # noqa: N801
     scattering: DfNode | None = None
     absorption_coefficient: Any = (0.0, 0.0, 0.0)
     scattering_coefficient: Any = (0.0, 0.0, 0.0)
+    emission_intensity: Any = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         if self.scattering is not None and not (isinstance(self.scattering, DfNode)
@@ -972,6 +982,7 @@ class material_volume:  # noqa: N801
                 f"material_volume.scattering must be a vdf node or None, got {self.scattering!r}")
         _check_color_field(self.absorption_coefficient, "material_volume.absorption_coefficient")
         _check_color_field(self.scattering_coefficient, "material_volume.scattering_coefficient")
+        _check_color_field(self.emission_intensity, "material_volume.emission_intensity")
 
 
 @dataclass(frozen=True)
@@ -1101,6 +1112,7 @@ class material:  # noqa: N801
 
         # which surface: the backface only for thin-walled materials that set one
         surface = self.surface
+        back_side = False
         use_backface = self.thin_walled and not self.backface.is_default
         if use_backface and n and not np.all(front):
             if np.any(front):
@@ -1109,6 +1121,7 @@ class material:  # noqa: N801
                     "separately for front lanes and back lanes"
                 )
             surface = self.backface
+            back_side = True
 
         ior = evaluate(self.ior, shading_state, "color", "material.ior")
         if np.any(ior <= 0.0):
@@ -1131,8 +1144,11 @@ class material:  # noqa: N801
             if not use_backface:
                 intensity[~front] = 0.0  # surface.emission is front side only
             if np.any(intensity != 0.0):
-                # object space -> local frame (spot_edf, also inside edf mixes)
-                context["object_to_local"] = np.stack([frame.s, frame.t, frame.n], axis=1)
+                # object space -> local frame (spot_edf, also inside edf mixes); a
+                # backface's edf emits from the back: its frame is turned over
+                turn = -1.0 if back_side else 1.0
+                context["object_to_local"] = np.stack([frame.s, frame.t, turn * frame.n],
+                                                      axis=1)
                 edf = emission.emission.bind(shading_state, **context)
         return Shading(bsdf=bsdf, edf=edf, intensity=intensity, mode=emission.mode,
                        normal=normal, cutout_opacity=opacity, frame=frame,

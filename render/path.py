@@ -38,8 +38,8 @@ from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.camera import camera_ray
 from render.df._kernel_common import unitize
-from render.df.anisotropic_vdf import eval_pdf as _phase_eval_pdf
-from render.df.anisotropic_vdf import sample as _phase_sample
+from render.df.measured_edf import O2L as MEASURED_O2L
+from render.df.spot_edf import SIGNATURE as _SPOT
 from render.jit import njit
 from render.light_sampling import (
     EVERY_DELTA,
@@ -53,6 +53,7 @@ from render.light_sampling import (
     selection_pdf,
 )
 from render.lights import INFINITE_DISTANCE
+from render.program import BASE, O_MEASURED_EDF, O_SPOT_EDF, OP, SIZE
 from render.sampler import (
     CAMERA_PAIR,
     FIRST_SEGMENT_PAIR,
@@ -68,6 +69,7 @@ from render.sampler import (
     sample_pair,
 )
 from render.volume import (
+    emitted,
     free_flight,
     stack_outside_ior,
     stack_pop,
@@ -85,6 +87,7 @@ __all__ = [
     "escaped",
 ]
 
+SPOT_O2L = _SPOT.offset("object_to_local_00")
 #: a lane may pass through at most this many cutout or null surfaces in a row
 MAX_CROSSINGS = 64
 #: a transmission counts as straight through (a null event) within this 1 - cos
@@ -108,7 +111,8 @@ NI = 9
 # emission varies (-1: constant), S_HIT: a pending hit's triangle (-1: not traced yet)
 S_O, S_D, S_FAR, S_LEAD, S_TAIL, S_C, S_BARY = 0, 3, 6, 7, 8, 9, 12
 S_HIT_T, S_HIT_B1, S_HIT_B2 = 15, 16, 17
-NSF = 18
+S_L = 18  # the sampled direction to the light from the vertex itself (a light's wo)
+NSF = 21
 S_ID, S_FACE, S_NSTK, S_CROSS, S_SEGMENT, S_HIT = 0, 1, 2, 3, 4, 5
 NSI = 6
 # AOV columns
@@ -116,8 +120,13 @@ A_ALBEDO, A_NORMAL, A_DEPTH, A_UV, A_OBJECT = 0, 3, 6, 7, 9
 NA = 10
 
 #: object flags; BOUND: shaded with numpy per hit, IOR_SENSITIVE: its program reads the
-#: IOR outside it (bound again inside other objects)
+#: IOR outside it (bound again inside other objects); EMIT_CONST: a constant diffuse
+#: emitter (``emit_hit``), EMIT_PROG: a constant edf program (its slots), EMIT_GLOBAL: one
+#: whose edfs read the rotation from object space (a global spot or measured edf)
 CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8, 16, 32, 64
+EMIT_PROG, EMIT_GLOBAL = 128, 256
+#: the edfs whose lobe may be fixed in object space (``object_to_local_ij`` context slots)
+OBJECT_EDFS = np.array([O_SPOT_EDF, O_MEASURED_EDF])
 #: one Embree call in this many is timed (the share of time inside Embree)
 TIMED_EVERY = 16
 
@@ -130,8 +139,11 @@ Tables = namedtuple(
         "face_normal",  # (f, 3) unit, on the side of the vertex normals
         "face_object",  # (f,) int64
         "face_offset",  # (k + 1,) int64 first triangle of each object (Embree geomID)
-        "code",  # the bsdf programs of the shading slots (render.program.ProgramTable):
-        "kids",  # slot 2k is object k's front, 2k + 1 its back
+        # the programs (render.program.ProgramTable): slot 2k is object k's bsdf on its
+        # front, 2k + 1 its back; 2K + 2k and 2K + 2k + 1 its edfs (K objects); then the
+        # media's phase functions; per-lane bindings after SC_NCONST
+        "code",
+        "kids",
         "frames",
         "chat",
         "roots",  # (2k,) root node of each slot's program, -1: black
@@ -141,10 +153,12 @@ Tables = namedtuple(
         "obj_opacity",  # (k,) constant cutout opacity
         "obj_ior",  # (k,) constant IOR (mean over channels)
         "obj_medium",  # (k,) int64 medium of the inside, -1: none
-        "emit_hit",  # (k, 3) radiance seen on the front of a constant diffuse emitter
+        # (k, 6) EMIT_CONST: radiance seen on the front of a constant diffuse emitter;
+        # EMIT_PROG: the intensity of the front and back edfs (per area in power mode)
+        "emit_hit",
+        "obj_linear",  # (k, 9) each object's linear map to world, row-major
         "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
-        "medium",  # (m, 9) sigma_a, sigma_s, sigma_t per channel
-        "phase",  # (m, w) anisotropic_vdf rows of the media's phase functions
+        "medium",  # (m, 12) sigma_a, sigma_s, sigma_t, emission per channel
         # the lights (render.light_sampling.light_table): a row per light and per node of
         # the light tree, a row per emissive triangle, an environment map and its texels'
         # (probabilities, cdf), the sun and sky's parameters and (probabilities, cdf)
@@ -165,7 +179,8 @@ SC_ENV_LIGHT = 15  # index of the environment light, -1: none
 SC_BIND = 16  # some objects are shaded with numpy (lanes may park)
 SC_PASS = 17  # some objects are cutouts or null surfaces (shadow rays may pass)
 SC_WIDTH = 18  # the image's width in pixels
-N_SCALARS = 19
+SC_NCONST = 19  # program slots of the scene (bindings' rows follow)
+N_SCALARS = 20
 
 
 # ---------------------------------------------------------------- small kernels
@@ -318,7 +333,7 @@ def _traced(counts, t0, rays):
 @njit
 def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
           lane_row, params, bf, bslot, L, alpha, aov, plf, pli, pso, psior, sf, si, sso,
-          ssior, ws, es, cso, csior, lw, counts):
+          ssior, ws, es, cso, csior, lw, ep, counts):
     """Trace the paths of lanes ``0 .. n-1`` to their end, or until a path hits an object
     that numpy must shade first (:func:`_needs_binding`): such a lane is *parked*, its
     state and hit written to row ``p`` of ``plf``, ``pli``, ``pso``, ``psior``.
@@ -336,7 +351,8 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     What each path sees is added to ``L[lane]``, its alpha and AOVs (first hits) to
     ``alpha`` and ``aov``.  Scratch: ``ws`` (the interpreter's), ``es`` (Embree's ray
     record), ``cso``/``csior`` (a lane's stack of closed objects, one row), ``lw`` (the
-    lights' weights, a row of ``tb.lights`` long).  Returns
+    lights' weights, a row of ``tb.lights`` long), ``ep`` (one parameter row: an edf
+    program's row with the hit's rotation from object space).  Returns
     ``(parked lanes, parked shadow records)``."""
     sc = tb.scalars
     eps = sc[SC_EPS]
@@ -353,12 +369,13 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     if mode >= EVERY_DELTA:
         for j in range(n_lights):
             n_every += 1 if is_delta(int(lights[j, L_KIND])) else 0
-    n_const = 2 * len(tb.obj_flags)
+    n_const = int(sc[SC_NCONST])
     nest = cso.shape[1]
     code, kids, frames, chat = tb.code, tb.kids, tb.frames, tb.chat
     face_light, emit_hit, face_normal = tb.face_light, tb.emit_hit, tb.face_normal
     face_object, frame_lo, frame_hi, roots = tb.face_object, tb.frame_lo, tb.frame_hi, tb.roots
-    medium, phase, face_offset = tb.medium, tb.phase, tb.face_offset
+    medium, face_offset = tb.medium, tb.face_offset
+    phase0 = 4 * len(tb.obj_flags)  # the media's phase functions' slots
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
     # counters as int64, not literal 0s: a literal argument is a type of its own, and
@@ -444,6 +461,12 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
             if med >= 0:
                 u_flight, u_roulette = sample_pair(v1, ph, idx, pair0 + P_FLIGHT, kind)
                 length = t_hit + shift
+                if medium[med, 9] > 0.0 or medium[med, 10] > 0.0 or medium[med, 11] > 0.0:
+                    # the medium's emission along the whole segment, in closed form
+                    w = 1.0 / ((r0 + r1 + r2) / 3.0)
+                    L[lane, 0] += b0 * emitted(medium, med, 0, length) * w
+                    L[lane, 1] += b1 * emitted(medium, med, 1, length) * w
+                    L[lane, 2] += b2 * emitted(medium, med, 2, length) * w
                 scattered, tt, w0, w1, w2, p0, p1, p2 = free_flight(medium, med, hero, u_flight,
                                                                     length)
                 if scattered:
@@ -462,7 +485,9 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                     break
                 nx = ny = nz = gx = gy = gz = sx = sy = sz = qx = qy = qz = 0.0
                 wox, woy, woz = -dx, -dy, -dz  # world directions at a medium vertex
-                k, row, root, f_lo, f_hi, entry_ior, g_wo, dist_v = -1, 0, -1, 0, 0, 1.0, 0.0, 0.0
+                k, entry_ior, g_wo, dist_v = -1, 1.0, 0.0, 0.0
+                row = phase0 + med  # the phase function's program
+                root, f_lo, f_hi = roots[row], frame_lo[row], frame_hi[row]
                 can_continue, is_null, encloses, front = True, False, False, True
             elif f < 0:
                 # ---- escaped: the environment, weighted against light sampling
@@ -514,6 +539,9 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 # emission, weighted against light sampling
                 if flags & EMIT_CONST and front and woz > 1e-10:
                     e0, e1, e2 = emit_hit[k, 0], emit_hit[k, 1], emit_hit[k, 2]
+                elif flags & EMIT_PROG and v < 0 and (front or (flags & TWO_FACED) != 0):
+                    e0, e1, e2 = _emission(tb, params, ws, ep, k, not front, sx, sy, sz, qx,
+                                           qy, qz, nx, ny, nz, wox, woy, woz)
                 if e0 != 0.0 or e1 != 0.0 or e2 != 0.0:
                     w = 1.0 / mis
                     jl = face_light[f]
@@ -571,9 +599,16 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 lpdf *= sel
                 if not lpdf > 0.0:
                     continue
+                if lface >= 0 and obj_flags[face_object[lface]] & EMIT_PROG:
+                    le0, le1, le2 = _emission_at(tb, params, ws, ep, lface, q1, q2, -lx, -ly,
+                                                 -lz)
+                    l0, l1, l2, lface = l0 * le0, l1 * le1, l2 * le2, -1
                 across = False
                 if scattered:
-                    f0, f1, f2, pb = _phase_eval_pdf(phase, med, 0, 0, wox, woy, woz, lx, ly, lz)
+                    f0, f1, f2, pb = interpreter.eval_pdf(
+                        code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy,
+                        woz, lx, ly, lz)
+                    prepared = True
                 else:
                     wlz = _dot(lx, ly, lz, nx, ny, nz)
                     g_wi = _dot(lx, ly, lz, gx, gy, gz)
@@ -606,9 +641,10 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
             ub1, ub2 = sample_pair(v1, ph, idx, pair0 + P_BSDF, kind)
             straight = False
             if scattered:
-                nx2, ny2, nz2, pdf, w0, w1, w2, lobe = _phase_sample(
-                    phase, med, 0, 0, wox, woy, woz, u_lobe, ub1, ub2)
-                if lobe == 0:
+                nx2, ny2, nz2, pdf, w0, w1, w2, lobe = interpreter.sample(
+                    code, kids, frames, params, chat, row, ws, root, f_lo, f_hi, wox, woy, woz,
+                    u_lobe, ub1, ub2, prepared)
+                if lobe == 0 or not (w0 > 0.0 or w1 > 0.0 or w2 > 0.0):
                     break
                 g_new = 0.0
             else:
@@ -666,6 +702,70 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
 
 
 @njit
+def _emission(tb, params, ws, ep, k, back, sx, sy, sz, qx, qy, qz, nx, ny, nz, wox, woy, woz):
+    """Radiance emitted toward ``wo`` (in the frame ``s, q, n`` of the point) by the
+    edf program of object ``k`` (EMIT_PROG): its front edf, or with ``back`` its thin-walled
+    backface's, whose frame is turned over (``wo`` mirrored through the tangent plane);
+    times the intensity of that side (``emit_hit``; per area in power mode), as
+    :meth:`render.integrator.Integrator._emitted` has it.  An edf whose lobe is fixed
+    in object space reads the rotation from object space into the (turned) frame: the
+    program's row is copied to ``ep`` with it."""
+    slot = 2 * len(tb.obj_flags) + 2 * k + (1 if back else 0)
+    root = tb.roots[slot]
+    if root < 0:
+        return 0.0, 0.0, 0.0
+    side = 1.0
+    if back:
+        woz, side = -woz, -1.0
+    P, row = params, slot
+    if tb.obj_flags[k] & EMIT_GLOBAL:
+        code, lin = tb.code, tb.obj_linear
+        for c in range(params.shape[1]):
+            ep[0, c] = params[slot, c]
+        for node in range(root - code[root, SIZE] + 1, root + 1):
+            if code[node, OP] == O_SPOT_EDF:
+                o = code[node, BASE] + SPOT_O2L
+            elif code[node, OP] == O_MEASURED_EDF:
+                o = code[node, BASE] + MEASURED_O2L
+            else:
+                continue
+            for i in range(3):
+                if i == 0:
+                    rx, ry, rz = sx, sy, sz
+                elif i == 1:
+                    rx, ry, rz = qx, qy, qz
+                else:
+                    rx, ry, rz = side * nx, side * ny, side * nz
+                for j in range(3):
+                    ep[0, o + 3 * i + j] = rx * lin[k, j] + ry * lin[k, 3 + j] + rz * lin[k, 6 + j]
+        P, row = ep, 0
+    e0, e1, e2, _ = interpreter.edf_eval_pdf(tb.code, tb.kids, tb.frames, P, tb.chat, row, ws,
+                                             root, tb.frame_lo[slot], tb.frame_hi[slot], wox,
+                                             woy, woz)
+    o = 3 if back else 0
+    eh = tb.emit_hit
+    return e0 * eh[k, o], e1 * eh[k, o + 1], e2 * eh[k, o + 2]
+
+
+@njit
+def _emission_at(tb, params, ws, ep, f, b1, b2, wx, wy, wz):
+    """:func:`_emission` of a light sample: at barycentrics ``(b1, b2)`` of triangle
+    ``f`` of an EMIT_PROG object, toward the unit world direction ``w``; 0 from the back
+    unless the object is two-faced."""
+    k = tb.face_object[f]
+    face_normal = tb.face_normal
+    front = _dot(wx, wy, wz, face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]) > 0.0
+    if not front and not (tb.obj_flags[k] & TWO_FACED):
+        return 0.0, 0.0, 0.0
+    _, _, _, nx, ny, nz, tx, ty, tz, _, _, _, _, _ = _attributes(tb.packed, tb.faces,
+                                                                 face_normal, f, b1, b2)
+    sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+    return _emission(tb, params, ws, ep, k, not front, sx, sy, sz, qx, qy, qz, nx, ny, nz,
+                     _dot(wx, wy, wz, sx, sy, sz), _dot(wx, wy, wz, qx, qy, qz),
+                     _dot(wx, wy, wz, nx, ny, nz))
+
+
+@njit
 def _park(plf, pli, pso, psior, p, cso, csior, lane, ox, oy, oz, dx, dy, dz, b0, b1, b2, r0,
           r1, r2, prev_pdf, seg, shift, vx, vy, vz, vnx, vny, vnz, prev_sum, depth, prev_delta,
           first, crossings, hero, nstk, segment, f, hb1, hb2, t_hit):
@@ -717,6 +817,7 @@ def _shadow_record(eps, sf, si, sso, ssior, r, cso, csior, nstk, lane, segment, 
     sf[r, S_TAIL] = sdist - far if finite else 0.0
     sf[r, S_C], sf[r, S_C + 1], sf[r, S_C + 2] = c0, c1, c2
     sf[r, S_BARY], sf[r, S_BARY + 1], sf[r, S_BARY + 2] = bary0, bary1, bary2
+    sf[r, S_L], sf[r, S_L + 1], sf[r, S_L + 2] = lx, ly, lz
     si[r, S_ID], si[r, S_FACE], si[r, S_NSTK], si[r, S_CROSS] = lane, face, nstk, 0
     si[r, S_SEGMENT], si[r, S_HIT] = segment, -1
     for s in range(sso.shape[1]):
@@ -823,7 +924,7 @@ def _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslo
         nx, ny, nz = bf[v, 0], bf[v, 1], bf[v, 2]
         tx, ty, tz = bf[v, 3], bf[v, 4], bf[v, 5]
         opacity, entry_ior = bf[v, 6], bf[v, 7]
-        slot, row = bslot[v], 2 * len(tb.obj_flags) + v
+        slot, row = bslot[v], int(sc[SC_NCONST]) + v
     else:
         opacity, entry_ior = tb.obj_opacity[k], tb.obj_ior[k]
     c0, c1, c2 = sf[r, S_C], sf[r, S_C + 1], sf[r, S_C + 2]

@@ -108,7 +108,8 @@ ALBEDO_POINTS = 89
     O_MEASURED_BSDF,
     O_MICROFLAKE_SHEEN,
     O_CHIANG_HAIR,
-) = range(18, 28)
+    O_FOG_VDF,
+) = range(18, 29)
 O_LEAF_LO, O_LEAF_HI = 18, 29
 # combiners added later
 (
@@ -124,6 +125,7 @@ O_LEAF_LO, O_LEAF_HI = 18, 29
     O_DIRECTIONAL_FACTOR_EDF,
     O_SHEEN_LAYER,
 ) = range(30, 41)
+O_MEASURED_EDF = 41  # an edf leaf
 
 COS_ZERO = 1e-10  # render.numerics.TOL.cos_zero
 DEFENSIVE = 0.05  # share of a combiner's selection spread evenly (render.df._combine)

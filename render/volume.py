@@ -61,6 +61,7 @@ __all__ = [
     "DistanceSample",
     "transmittance",
     "free_flight",
+    "emitted",
     "stack_push",
     "stack_pop",
     "stack_outside_ior",
@@ -126,7 +127,8 @@ class DistanceSample:
 
 
 class HomogeneousMedium:
-    """A homogeneous medium with per-channel coefficients and a Henyey–Greenstein phase.
+    """A homogeneous medium with per-channel coefficients, a phase function (any vdf
+    program) and emission.
 
     Parameters
     ----------
@@ -134,7 +136,14 @@ class HomogeneousMedium:
         ``sigma_a``, ``sigma_s`` per meter, >= 0 (stored per scene unit in
         :attr:`sigma_a`, :attr:`sigma_s`, :attr:`sigma_t`).
     directional_bias : float
-        The ``anisotropic_vdf``'s ``g`` in [-1, 1].
+        The ``anisotropic_vdf``'s ``g`` in [-1, 1] (when ``phase`` is not given).
+    phase : bound vdf, optional
+        The phase function: a :mod:`render.df` vdf (``anisotropic_vdf``, ``fog_vdf``,
+        their mixes and ``tint``) of one parameter row; its program runs in the path
+        kernel.
+    emission_intensity : float or (3,)
+        MDL 1.7's ``material_volume.emission_intensity``: radiance added per unit
+        distance, W / (m^3 sr), >= 0 (stored per scene unit in :attr:`emission`).
 
     Examples
     --------
@@ -146,7 +155,7 @@ class HomogeneousMedium:
     """
 
     def __init__(self, absorption_coefficient=0.0, scattering_coefficient=0.0,
-                 directional_bias: float = 0.0):
+                 directional_bias: float = 0.0, phase=None, emission_intensity=0.0):
         from render.df.anisotropic_vdf import AnisotropicVdf
 
         # MDL gives coefficients per meter; paths are measured in scene units
@@ -155,16 +164,25 @@ class HomogeneousMedium:
         self.sigma_s = _coefficient(scattering_coefficient, "scattering_coefficient") * (
             METERS_PER_SCENE_UNIT)
         self.sigma_t = self.sigma_a + self.sigma_s
-        if np.ndim(directional_bias) != 0 or callable(directional_bias):
-            raise ValueError(
-                "anisotropic_vdf(directional_bias) must be a constant for a homogeneous "
-                f"medium, got {directional_bias!r}"
-            )
-        self.phase = AnisotropicVdf(float(directional_bias))
+        #: radiance added per scene unit of path (W / (m^3 sr) times meters per unit)
+        self.emission = _coefficient(emission_intensity, "emission_intensity") * (
+            METERS_PER_SCENE_UNIT)
+        if phase is None:
+            if np.ndim(directional_bias) != 0 or callable(directional_bias):
+                raise ValueError(
+                    "anisotropic_vdf(directional_bias) must be a constant for a homogeneous "
+                    f"medium, got {directional_bias!r}"
+                )
+            phase = AnisotropicVdf(float(directional_bias))
+        program = getattr(phase, "program", None)
+        if program is None or program.kind != "vdf" or program.rows != 1:
+            raise ValueError("the phase function of a homogeneous medium must be a bound vdf "
+                             f"of one parameter row (render.df), got {phase!r}")
+        self.phase = phase
         #: whether any channel scatters (else the segment is attenuated, never sampled)
         self.scatters = bool(np.any(self.sigma_s > 0.0))
         #: whether the medium does anything at all
-        self.is_vacuum = bool(np.all(self.sigma_t == 0.0))
+        self.is_vacuum = bool(np.all(self.sigma_t == 0.0) and np.all(self.emission == 0.0))
 
     @classmethod
     def from_material_volume(cls, volume) -> HomogeneousMedium | None:
@@ -173,30 +191,28 @@ class HomogeneousMedium:
         Raises
         ------
         ValueError
-            A varying coefficient or bias, or a vdf other than ``anisotropic_vdf``.
+            A varying coefficient, emission or vdf argument (a heterogeneous medium).
         """
-        g = 0.0
         vdf = getattr(volume, "scattering", None)
+        phase = None
         if vdf is not None:
-            if vdf.name != "anisotropic_vdf":
-                raise ValueError(
-                    f"material_volume.scattering: df::{vdf.name} is not supported; use "
-                    "df::anisotropic_vdf"
-                )
-            g = vdf.kwargs.get("directional_bias", 0.0)
-        medium = cls(volume.absorption_coefficient, volume.scattering_coefficient, g)
+            phase = _bind_vdf(vdf)
+        medium = cls(volume.absorption_coefficient, volume.scattering_coefficient,
+                     phase=phase, emission_intensity=getattr(volume, "emission_intensity", 0.0))
         return None if medium.is_vacuum else medium
 
     def __repr__(self) -> str:
         return (
             f"HomogeneousMedium(sigma_a={self.sigma_a.tolist()}, "
-            f"sigma_s={self.sigma_s.tolist()}, g={float(self.phase.directional_bias)})"
+            f"sigma_s={self.sigma_s.tolist()}, phase={type(self.phase).__name__}, "
+            f"emission={self.emission.tolist()})"
         )
 
     @property
     def row(self) -> np.ndarray:
-        """(9,) ``sigma_a``, ``sigma_s``, ``sigma_t``: the kernels' row of this medium."""
-        return np.concatenate([self.sigma_a, self.sigma_s, self.sigma_t])
+        """(12,) ``sigma_a``, ``sigma_s``, ``sigma_t``, emission: the kernels' row of
+        this medium."""
+        return np.concatenate([self.sigma_a, self.sigma_s, self.sigma_t, self.emission])
 
     def transmittance(self, distance: Arr) -> Rgb:
         """``exp(-sigma_t d)`` per channel, (n, 3); ``d = inf`` gives 0 (or 1 where
@@ -292,6 +308,49 @@ def _free_flight_batch(medium, t_max, hero, u):
         (scattered[i], t[i], value[i, 0], value[i, 1], value[i, 2], pdf[i, 0], pdf[i, 1],
          pdf[i, 2]) = free_flight(medium, 0, hero[i], u[i], t_max[i])
     return t, scattered, value, pdf
+
+
+@njit(inline="always")
+def emitted(medium, m, c, length):
+    """The radiance medium ``m`` emits along a segment of ``length``, seen from its
+    start, in channel ``c``: ``e (1 - exp(-sigma_t length)) / sigma_t`` (``e length``
+    without extinction; 0 for an infinite segment without extinction)."""
+    e = medium[m, 9 + c]
+    if e == 0.0:
+        return 0.0
+    st = medium[m, 6 + c]
+    if st > 0.0:
+        return e * -math.expm1(-st * min(length, 1e300)) / st
+    return e * length if length < np.inf else 0.0
+
+
+def _bind_vdf(vdf):
+    """A ``material_volume.scattering`` node bound to its program (constant arguments
+    only: a homogeneous medium)."""
+    from displacement.state import ShadingState
+
+    for node in _nodes(vdf):
+        for key, value in node.kwargs.items():
+            if callable(value):
+                raise ValueError(
+                    f"material_volume.scattering: df::{node.name}({key}) must be a constant: "
+                    "only homogeneous media are rendered (a varying phase function would "
+                    "describe a heterogeneous medium)")
+    z = np.array([[0.0, 0.0, 1.0]])
+    state = ShadingState(np.zeros((1, 3)), z, np.zeros((1, 2)), np.array([[1.0, 0.0, 0.0]]),
+                         np.array([[0.0, 1.0, 0.0]]))
+    return vdf.bind(state)
+
+
+def _nodes(node):
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        yield n
+        for value in n.kwargs.values():
+            for v in value if isinstance(value, list | tuple) else (value,):
+                if hasattr(v, "kwargs"):
+                    stack.append(v)
 
 
 @njit

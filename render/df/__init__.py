@@ -245,5 +245,13 @@ __all__ = [
 
 # volumes (render.volume uses it as the phase function of homogeneous media)
 from render.df.anisotropic_vdf import AnisotropicVdf, anisotropic_vdf  # noqa: E402
+from render.df.fog_vdf import FogVdf, fog_vdf  # noqa: E402
 
-__all__ += ["AnisotropicVdf", "anisotropic_vdf"]
+__all__ += ["AnisotropicVdf", "anisotropic_vdf", "FogVdf", "fog_vdf"]
+
+# measured light profiles (IES LM-63 files)
+from render.df._ies import IesError, LightProfile, read_ies, write_ies  # noqa: E402
+from render.df.measured_edf import MeasuredEdf, measured_edf  # noqa: E402
+
+__all__ += ["IesError", "LightProfile", "read_ies", "write_ies", "MeasuredEdf",
+            "measured_edf"]

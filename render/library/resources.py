@@ -43,6 +43,7 @@ __all__ = [
     "find_texture",
     "load_texture",
     "load_measurement",
+    "load_light_profile",
     "INVALID_TEXTURE",
     "CURVE_MODES",
     "evaluation",
@@ -346,6 +347,42 @@ def load_measurement(file: str, base_dir=None):
         except MbsdfError as e:
             raise ResourceError(str(e), "give an MBSDF file (the MDL spec, Appendix B)") \
                 from None
+    return _TEXTURES[key]
+
+
+def load_light_profile(file: str, base_dir=None):
+    """Read the IES LM-63 file of ``light_profile("file.ies")`` (cached), found as textures
+    and measurements are (:func:`find_texture`: absolute as given, else ``base_dir`` -- the
+    module's or the scene's folder -- then the texture search path).
+
+    Returns
+    -------
+    render.df.LightProfile
+
+    Raises
+    ------
+    ResourceError
+        Not found (with the folders searched and a close name), or malformed (the file's
+        path, line and what is wrong, from :func:`render.df.read_ies`).
+    """
+    from render.df._ies import IesError, read_ies
+
+    path = find_texture(file, base_dir)
+    if path is None:
+        dirs = _searched(base_dir)
+        names = sorted({p.name for d in dirs if d.is_dir() for p in d.iterdir()
+                        if p.is_file() and p.suffix.lower() == ".ies"})
+        hint = difflib.get_close_matches(Path(file).name, names, 1)
+        raise ResourceError(
+            f"light_profile: no file {file!r} in {', '.join(str(d) for d in dirs)}",
+            f"did you mean {hint[0]!r}?" if hint else
+            "give the IES file's path, relative to the scene file or the module")
+    key = (path.resolve(), path.stat().st_mtime_ns, "ies")
+    if key not in _TEXTURES:
+        try:
+            _TEXTURES[key] = read_ies(path)
+        except IesError as e:
+            raise ResourceError(str(e)) from None
     return _TEXTURES[key]
 
 

@@ -35,7 +35,7 @@ class Backend:
         self.find_resources(module)
 
     def find_resources(self, module) -> None:
-        """A warning for each resource file (a texture, an MBSDF file) named in ``module``
+        """A warning for each resource file (a texture, an MBSDF or IES file) named in ``module``
         that is not found (MDL reads it as an invalid resource, black; a scene refuses
         it)."""
         from mdl import ast as A

@@ -49,8 +49,9 @@ from mdl.entities import (
 
 __all__ = ["ModuleGen", "CodegenError", "lane_expression_source", "RESOURCES"]
 
-#: the resources the workbench reads (``texture_2d("f.png")``, ``bsdf_measurement("f.mbsdf")``)
-RESOURCES = ("texture_2d", "bsdf_measurement")
+#: the resources the workbench reads (``texture_2d("f.png")``, ``bsdf_measurement("f.mbsdf")``,
+#: ``light_profile("f.ies")``)
+RESOURCES = ("texture_2d", "bsdf_measurement", "light_profile")
 
 _BINOPS = {"+": "LN.add", "-": "LN.sub", "*": "LN.mul", "/": "LN.div", "%": "LN.mod",
            "==": "LN.eq", "!=": "LN.ne", "<": "LN.lt", "<=": "LN.le", ">": "LN.gt",
@@ -881,7 +882,7 @@ class _FunctionGen:
                 return "None"
             if str(call.type) not in RESOURCES:
                 raise CodegenError(f"{call.type} resources are not supported by the workbench "
-                                   "(2D textures and measured BSDFs only)", e,
+                                   "(2D textures, measured BSDFs and light profiles only)", e,
                                    "use a texture_2d")
             name = self.info(name_node).const
             gamma = None

@@ -61,21 +61,30 @@ SCENE_DIR: list = [None]
 
 
 def resource_loader(module, kind: str, name: str, gamma, strict: bool = False):
-    """Load a resource named in ``module`` (a texture, or an MBSDF file for
-    ``bsdf_measurement``): beside the module file first, then in the scene's folder,
-    then the texture search path.  A missing file is MDL's invalid resource (texture
-    lookups give 0) unless ``strict`` (then :class:`ResourceError`)."""
-    from render.library.resources import ResourceError, load_measurement, load_texture
+    """Load a resource named in ``module`` (a texture, an MBSDF file for
+    ``bsdf_measurement``, an IES file for ``light_profile``): beside the module file
+    first, then in the scene's folder, then the texture search path.  A missing file is
+    MDL's invalid resource (texture lookups give 0) unless ``strict`` (then
+    :class:`ResourceError`)."""
+    from render.library.resources import (
+        ResourceError,
+        load_light_profile,
+        load_measurement,
+        load_texture,
+    )
 
     if kind not in codegen.RESOURCES:
         raise rt.MdlRuntimeError(f"{module.source.name}: {kind} resources are not supported "
-                                 "by the workbench (2D textures and measured BSDFs only)")
+                                 "by the workbench (2D textures, measured BSDFs and light "
+                                 "profiles only)")
     mode = {"gamma_linear": "linear", "gamma_srgb": "srgb", None: "default",
             "gamma_default": "default"}.get(gamma, "default")
     bases = (None if module.path is None else module.path.parent, SCENE_DIR[0])
     try:
         if kind == "bsdf_measurement":
             return load_measurement(name, bases)
+        if kind == "light_profile":
+            return load_light_profile(name, bases)
         return load_texture(name, mode, bases)
     except ResourceError:
         if strict:
