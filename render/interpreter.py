@@ -55,6 +55,9 @@ from render.df.diffuse_transmission_bsdf import sample as _dt_sample
 from render.df.directional_factor import curve_constant as _df_constant
 from render.df.directional_factor import edf_scale as _dfe_scale
 from render.df.directional_factor import scale as _df_scale
+from render.df.dusty_diffuse_reflection_bsdf import albedo as _dd_albedo
+from render.df.dusty_diffuse_reflection_bsdf import eval_pdf as _dd_eval_pdf
+from render.df.dusty_diffuse_reflection_bsdf import sample as _dd_sample
 from render.df.fresnel_factor import scale as _ff_scale
 from render.df.fresnel_layer import curve_constant as _fr_curve_constant
 from render.df.fresnel_layer import curve_h as _fr_curve_h
@@ -134,6 +137,7 @@ from render.program import (
     O_DIFFUSE_TRANSMISSION,
     O_DIRECTIONAL_FACTOR,
     O_DIRECTIONAL_FACTOR_EDF,
+    O_DUSTY_DIFFUSE_REFLECTION,
     O_FRESNEL_FACTOR,
     O_FRESNEL_LAYER,
     O_LEAF_HI,
@@ -237,6 +241,8 @@ def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
         return _bg_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     return 0.0, 0.0, 0.0, 0.0
 
 
@@ -271,6 +277,8 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
         return _bg_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
 
 
@@ -300,6 +308,8 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _bg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_ANISOTROPIC_VDF:
         return _vdf_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     return 0.0, 0.0, 0.0
 
 

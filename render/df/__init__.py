@@ -58,6 +58,10 @@ from render.df.directional_factor import (
     directional_factor,
     directional_factor_edf,
 )
+from render.df.dusty_diffuse_reflection_bsdf import (
+    DustyDiffuseReflectionBsdf,
+    dusty_diffuse_reflection_bsdf,
+)
 from render.df.fresnel_factor import FresnelFactor, fresnel_factor
 from render.df.fresnel_layer import (
     ColorFresnelLayer,
@@ -135,6 +139,8 @@ __all__ = [
     "diffuse_reflection_bsdf",
     "DiffuseTransmissionBsdf",
     "diffuse_transmission_bsdf",
+    "DustyDiffuseReflectionBsdf",
+    "dusty_diffuse_reflection_bsdf",
     "SpecularBsdf",
     "specular_bsdf",
     "SimpleGlossyBsdf",
