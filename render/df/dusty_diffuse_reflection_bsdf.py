@@ -352,8 +352,9 @@ def _table() -> np.ndarray:
 
 def albedo_table(row, flags: int = 0) -> np.ndarray:
     """The node table of :func:`albedo` (the same for every tint: built once per process,
-    about 0.2 s)."""
-    return _table()
+    about 0.2 s; a writable copy, as every node table: numba compiles its kernels once
+    more for a read-only array)."""
+    return _table().copy()
 
 
 # --- the Python class ----------------------------------------------------------------------

@@ -69,7 +69,7 @@ from render.program import (
 )
 
 __all__ = ["MicroflakeSheenBsdf", "microflake_sheen_bsdf", "SIGNATURE", "LOBE_SIGNATURE",
-           "eval_pdf", "sample", "albedo", "white_albedo", "ltc_coefficients"]
+           "eval_pdf", "sample", "albedo", "white_albedo", "ltc_coefficients", "albedo_table"]
 
 #: ``df::microflake_sheen_bsdf`` (MDL 1.10); ``multiscatter`` is a child, not packed
 SIGNATURE = Signature("bsdf", (
@@ -208,8 +208,10 @@ def albedo(P, row, b, flags, wox, woy, woz, tables, t):
 
 
 def albedo_table(row, flags: int = 0) -> np.ndarray:
-    """The node table: the LTC table (the same for every lane and roughness)."""
-    return _TABLE
+    """The node table: the LTC table (the same for every lane and roughness; a writable
+    copy, as every node table: numba compiles its kernels once more for a read-only
+    array)."""
+    return _TABLE.copy()
 
 
 # --- the Python class ------------------------------------------------------------------
