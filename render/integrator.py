@@ -317,7 +317,8 @@ class Integrator:
                 if n.name in ("specular_bsdf", "simple_glossy_bsdf",
                               "backscattering_glossy_reflection_bsdf", "fresnel_layer",
                               "color_fresnel_layer", "custom_curve_layer",
-                              "color_custom_curve_layer", "diffuse_transmission_bsdf"):
+                              "color_custom_curve_layer", "diffuse_transmission_bsdf",
+                              "thin_film"):
                     return True
         return False
 

@@ -55,6 +55,9 @@ from render.df.diffuse_transmission_bsdf import sample as _dt_sample
 from render.df.directional_factor import curve_constant as _df_constant
 from render.df.directional_factor import edf_scale as _dfe_scale
 from render.df.directional_factor import scale as _df_scale
+from render.df.dusty_diffuse_reflection_bsdf import albedo as _dd_albedo
+from render.df.dusty_diffuse_reflection_bsdf import eval_pdf as _dd_eval_pdf
+from render.df.dusty_diffuse_reflection_bsdf import sample as _dd_sample
 from render.df.fog_vdf import eval_pdf as _fog_eval_pdf
 from render.df.fog_vdf import sample as _fog_sample
 from render.df.fresnel_factor import scale as _ff_scale
@@ -86,6 +89,10 @@ from render.df.microfacet_ggx_smith_bsdf import eval_pdf as _mgs_eval_pdf
 from render.df.microfacet_ggx_smith_bsdf import sample as _mgs_sample
 from render.df.microfacet_ggx_vcavities_bsdf import eval_pdf as _mgv_eval_pdf
 from render.df.microfacet_ggx_vcavities_bsdf import sample as _mgv_sample
+from render.df.microflake_sheen_bsdf import albedo as _mfs_albedo
+from render.df.microflake_sheen_bsdf import eval_pdf as _mfs_eval_pdf
+from render.df.microflake_sheen_bsdf import sample as _mfs_sample
+from render.df.microflake_sheen_bsdf import white_albedo as _mfs_white
 from render.df.normalized_mix import mix_weights as _normalized_weights
 from render.df.sheen_bsdf import albedo as _sh_albedo
 from render.df.sheen_bsdf import eval_pdf as _sh_eval_pdf
@@ -138,6 +145,7 @@ from render.program import (
     O_DIFFUSE_TRANSMISSION,
     O_DIRECTIONAL_FACTOR,
     O_DIRECTIONAL_FACTOR_EDF,
+    O_DUSTY_DIFFUSE_REFLECTION,
     O_FOG_VDF,
     O_FRESNEL_FACTOR,
     O_FRESNEL_LAYER,
@@ -152,6 +160,7 @@ from render.program import (
     O_MICROFACET_BECKMANN_VCAVITIES,
     O_MICROFACET_GGX_SMITH,
     O_MICROFACET_GGX_VCAVITIES,
+    O_MICROFLAKE_SHEEN,
     O_NORMALIZED_MIX,
     O_NORMALIZED_MIX_EDF,
     O_SHEEN,
@@ -245,6 +254,10 @@ def leaf_eval_pdf(op, P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t):
         return _vdf_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
     if op == O_FOG_VDF:
         return _fog_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz)
+    if op == O_MICROFLAKE_SHEEN:
+        return _mfs_eval_pdf(P, row, b, flags, ox, oy, oz, ix, iy, iz, tables, t)
     return 0.0, 0.0, 0.0, 0.0
 
 
@@ -281,6 +294,10 @@ def leaf_sample(op, P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t):
         return _vdf_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
     if op == O_FOG_VDF:
         return _fog_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y)
+    if op == O_MICROFLAKE_SHEEN:
+        return _mfs_sample(P, row, b, flags, ox, oy, oz, u1, u2x, u2y, tables, t)
     return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
 
 
@@ -310,6 +327,10 @@ def leaf_albedo(op, P, row, b, flags, ox, oy, oz, tables, t):
         return _bg_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     if op == O_ANISOTROPIC_VDF or op == O_FOG_VDF:
         return _vdf_albedo(P, row, b, flags, ox, oy, oz)
+    if op == O_DUSTY_DIFFUSE_REFLECTION:
+        return _dd_albedo(P, row, b, flags, ox, oy, oz, tables, t)
+    if op == O_MICROFLAKE_SHEEN:
+        return _mfs_albedo(P, row, b, flags, ox, oy, oz, tables, t)
     return 0.0, 0.0, 0.0
 
 
@@ -468,13 +489,17 @@ def _mix_weight(op, P, row, b, fl, k, i):
 
 @njit
 def _sheen_e(code, kids, P, row, tables, k, w):
-    """The white albedo ``E(w)`` of a sheen layer's lobe (its layer child, a sheen leaf)
-    from the lobe's own table: what the layer's ``(1 - max(E(wo), E(wi)))`` reads."""
+    """The white albedo ``E(w)`` of a sheen layer's lobe (its layer child, a
+    ``sheen_bsdf`` or ``microflake_sheen_bsdf`` leaf) from the lobe's own table: what
+    the layer's ``(1 - max(E(wo), E(wi)))`` reads."""
     lay = kids[code[k, KID0]]
     if lay < 0:
         return 0.0
-    return min(max(_sh_white(P, row, code[lay, BASE], w[0], w[1], w[2], tables,
-                             code[lay, TABLE]), 0.0), 1.0)
+    if code[lay, OP] == O_MICROFLAKE_SHEEN:
+        e = _mfs_white(P, row, code[lay, BASE], w[0], w[1], w[2], tables, code[lay, TABLE])
+    else:
+        e = _sh_white(P, row, code[lay, BASE], w[0], w[1], w[2], tables, code[lay, TABLE])
+    return min(max(e, 0.0), 1.0)
 
 
 # ------------------------------------------------------------------ small helpers

@@ -3,8 +3,9 @@
 Beside the Handbook's figures (:mod:`gallery.figures`), this page shows the dfs of MDL
 that the Handbook does not use (issue 16): each scene ``gallery/dfs/scenes/df_NAME.toml``
 puts three spheres on the stage, the df at roughness 0.1, 0.3 and 0.6 from left to
-right (the scene's opening comment says what varies where a df has no roughness).  The
-scenes are written by :func:`write_scenes` from :data:`DFS`, so the page and the
+right, or, for a df without roughness, three values of another parameter (the entry's
+third element, ``{v}`` in its expression; the scene's opening comment says what varies).
+The scenes are written by :func:`write_scenes` from :data:`DFS`, so the page and the
 expressions stay one list.
 
 References and the regression rule are the gallery's own (:mod:`gallery.references`,
@@ -34,7 +35,8 @@ HERE = Path(__file__).resolve().parent
 ROUGHNESS = (0.1, 0.3, 0.6)
 GLOSSY = "df::microfacet_ggx_smith_bsdf(roughness_u: {r})"
 
-#: name -> (what the page says, the material expression with {r} for the roughness)
+#: name -> (what the page says, the material expression with {r} for the roughness[,
+#: (what varies instead, its three values): {v} in the expression])
 DFS = {
     "microfacet_ggx_smith_bsdf": (
         "GGX, Smith masking, copper-like tint",
@@ -84,6 +86,14 @@ DFS = {
         "df::unbounded_mix(df::bsdf_component[](df::bsdf_component(0.6, "
         "df::diffuse_reflection_bsdf(tint: color(0.7, 0.4, 0.2))), df::bsdf_component(0.4, "
         + GLOSSY + ")))"),
+    "microflake_sheen_bsdf": (
+        "microflake (LTC) sheen over a dark red diffuse multiscatter (as sheen_bsdf's)",
+        "df::microflake_sheen_bsdf(roughness: {r}, tint: color(1.0, 0.75, 0.8), "
+        "multiscatter_tint: color(1.0), multiscatter: df::diffuse_reflection_bsdf(tint: "
+        "color(0.35, 0.04, 0.08)))"),
+    "dusty_diffuse_reflection_bsdf": (
+        "d'Eon's Lambertian-sphere (dusty) diffuse, grey",
+        "df::dusty_diffuse_reflection_bsdf(tint: color({v}))", ("tint", (0.25, 0.5, 0.9))),
 }
 
 _STAGE = """
@@ -136,8 +146,14 @@ def reference_dir() -> Path:
     return HERE / "reference"
 
 
+def _varies(name: str) -> tuple[str, tuple]:
+    """What varies from left to right in a df's scene, and its three values."""
+    entry = DFS[name]
+    return entry[2] if len(entry) > 2 else ("roughness", ROUGHNESS)
+
+
 def _expression(name: str, r: float, k: int) -> str:
-    body = DFS[name][1].format(r=r, r3=round(3 * r, 6), k=k)
+    body = DFS[name][1].format(r=r, r3=round(3 * r, 6), k=k, v=_varies(name)[1][k])
     return f"material(surface: material_surface(scattering: {body}))"
 
 
@@ -146,9 +162,10 @@ def write_scenes(folder: Path | None = None) -> list[Path]:
     folder = folder or scenes_dir()
     folder.mkdir(parents=True, exist_ok=True)
     out = []
-    for i, (name, (what, _)) in enumerate(DFS.items(), start=1):
+    for i, (name, (what, *_)) in enumerate(DFS.items(), start=1):
+        label, values = _varies(name)
         lines = [f"# Distribution functions {i}: df::{name}",
-                 f"# {what}; roughness {', '.join(map(str, ROUGHNESS))} from left to right.",
+                 f"# {what}; {label} {', '.join(map(str, values))} from left to right.",
                  _STAGE]
         for j, (x, r) in enumerate(zip((-1.1, 0.0, 1.1), ROUGHNESS, strict=True)):
             lines.append(f"""[[objects]]
@@ -220,7 +237,8 @@ def write_page(path: Path | None = None) -> Path:
     path.write_text(
         "<!doctype html><html><head><meta charset='utf-8'><title>Distribution functions"
         "</title></head><body><h1>MDL's distribution functions on spheres</h1>"
-        "<p>Roughness 0.1, 0.3 and 0.6 from left to right (gallery/dfs).</p>"
+        "<p>Roughness 0.1, 0.3 and 0.6 from left to right, unless a scene says otherwise "
+        "(gallery/dfs).</p>"
         + "".join(rows) + "</body></html>\n", encoding="utf-8")
     return path
 

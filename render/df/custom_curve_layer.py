@@ -37,12 +37,18 @@ steeply from normal incidence (``custom_curve_layer(0, 1, 1, glossy r 0.5, mirro
 coat's own lobe is libbsdf's.  Over diffuse bases ``C(nk2)`` dominates and libbsdf's
 factors are kept almost everywhere (measured in
 ``tests/render/df/test_custom_curve_layer.py``).
+
+Under ``thin_film`` (MDL 1.8) the curve takes the film's change of the reflectance of a
+dielectric whose normal reflectance is ``R0``, ``C' = saturate(C + shift)``
+(:mod:`render.df.thin_film`; the film slots and the IOR context are not MDL parameters of
+this df).
 """
 
 from __future__ import annotations
 
 from render.df._layer import curve_estimates, curve_factors, curve_geometry, f82_curve1
-from render.df._signature import REQUIRED, Param, Signature
+from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
+from render.df.thin_film import FILM_PARAMS, film_shift, schlick_ior
 from render.jit import njit
 from render.program import O_CUSTOM_CURVE_LAYER, df_class
 
@@ -75,37 +81,66 @@ __all__ = [
 def _params(r0: Param, r90: Param, f82: Param, weight: Param) -> tuple:
     return (r0, r90, f82, Param("exponent", "float", 5.0, clamp=(0.0, None)), weight,
             Param("layer", "bsdf", None), Param("base", "bsdf", None),
-            Param("normal", "float3", "state::normal()"))
+            Param("normal", "float3", "state::normal()"), *FILM_PARAMS)
 
 
-#: ``df::custom_curve_layer``
+#: ``df::custom_curve_layer``, plus the film slots and the renderer's IORs on the ``+z``
+#: and ``-z`` sides (what a ``thin_film`` over the curve reads)
 SIGNATURE = Signature("bsdf", _params(
     Param("normal_reflectivity", "float", REQUIRED, clamp=(0.0, 1.0), packed="color"),
     Param("grazing_reflectivity", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
     Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0), mdl=False),
     Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
-))
+), context=("ior_outside", "ior_inside"))
 #: ``df::color_custom_curve_layer`` (MDL 1.4; ``f82_factor`` 1.10)
 COLOR_SIGNATURE = Signature("bsdf", _params(
     Param("normal_reflectivity", "color", REQUIRED, clamp=(0.0, 1.0)),
     Param("grazing_reflectivity", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
-))
+), context=("ior_outside", "ior_inside"))
 _R0 = COLOR_SIGNATURE.offset("normal_reflectivity")
 _R90 = COLOR_SIGNATURE.offset("grazing_reflectivity")
 _F82 = COLOR_SIGNATURE.offset("f82_factor")
 _EXPONENT = COLOR_SIGNATURE.offset("exponent")
 _WEIGHT = COLOR_SIGNATURE.offset("weight")
+_FILM_D = COLOR_SIGNATURE.offset("thin_film_thickness")
+_FILM_N = COLOR_SIGNATURE.offset("thin_film_ior")
+_IOR_OUTSIDE = COLOR_SIGNATURE.offset("ior_outside")
 
 
 @njit
-def _curve3(P, row, b, c):
-    """``C(c)`` per channel (the F82-tinted custom curve)."""
+def _film3(P, row, b, flags, woz, c):
+    """The shift a ``thin_film`` makes at cosine ``c``
+    (:func:`render.df.thin_film.film_shift`), on the dielectric whose normal reflectance
+    is ``R0`` (:func:`~render.df.thin_film.schlick_ior`, per channel): from outside (or
+    on a thin wall) a film over that IOR, from inside a film over the outside medium
+    seen from it (its channels' mean), as ``fresnel_layer``'s film."""
+    o = P[row, b + _IOR_OUTSIDE]
+    i0 = schlick_ior(P[row, b + _R0])
+    i1 = schlick_ior(P[row, b + _R0 + 1])
+    i2 = schlick_ior(P[row, b + _R0 + 2])
+    f0, f1, f2 = P[row, b + _FILM_N], P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2]
+    d = P[row, b + _FILM_D]
+    if woz < 0.0 and (flags & THIN_WALLED) == 0:
+        return film_shift(c, (i0 + i1 + i2) / 3.0, f0, f1, f2, o, o, o, 0.0, 0.0, 0.0, d)
+    return film_shift(c, o, f0, f1, f2, i0, i1, i2, 0.0, 0.0, 0.0, d)
+
+
+@njit
+def _curve3(P, row, b, flags, woz, c):
+    """``C(c)`` per channel (the F82-tinted custom curve; under a ``thin_film`` shifted
+    by the film, ``saturate(C + shift)``, with the IOR context of ``wo``'s side)."""
     p = P[row, b + _EXPONENT]
-    return (f82_curve1(c, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
-            f82_curve1(c, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
-            f82_curve1(c, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
+    c0 = f82_curve1(c, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p)
+    c1 = f82_curve1(c, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p)
+    c2 = f82_curve1(c, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p)
+    if P[row, b + _FILM_D] > 0.0:
+        s0, s1, s2 = _film3(P, row, b, flags, woz, c)
+        c0 = min(max(c0 + s0, 0.0), 1.0)
+        c1 = min(max(c1 + s1, 0.0), 1.0)
+        c2 = min(max(c2 + s2, 0.0), 1.0)
+    return c0, c1, c2
 
 
 @njit
@@ -113,9 +148,9 @@ def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
     """The layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
     transmitted ``wi`` mirrored, no refraction half vector)."""
     kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
-    h0, h1, h2 = _curve3(P, row, b, kh)
-    a0, a1, a2 = _curve3(P, row, b, nk1)
-    r0, r1, r2 = _curve3(P, row, b, nk2)
+    h0, h1, h2 = _curve3(P, row, b, flags, woz, kh)
+    a0, a1, a2 = _curve3(P, row, b, flags, woz, nk1)
+    r0, r1, r2 = _curve3(P, row, b, flags, woz, nk2)
     return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
 
 
@@ -141,7 +176,7 @@ def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
 def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
     """The layer estimates: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
     s = -1.0 if wolz < 0.0 else 1.0
-    c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
+    c0, c1, c2 = _curve3(P, row, b, flags, woz, min(max(wolz * s, 0.0), 1.0))
     return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
                            P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
 
@@ -153,9 +188,11 @@ def layer_possible(P, row, b, flags):
     child exists and the frames agree."""
     pos_l = False
     white = True
+    film = P[row, b + _FILM_D] > 0.0  # a film reflects even where the curve is 0
     for k in range(3):
         w = P[row, b + _WEIGHT + k]
-        pos_l = pos_l or w * max(P[row, b + _R0 + k], P[row, b + _R90 + k]) > 0.0
+        pos_l = pos_l or w * max(P[row, b + _R0 + k], P[row, b + _R90 + k]) > 0.0 or (
+            film and w > 0.0)
         white = white and w == 1.0
     return pos_l, not (white and curve_is_one(P, row, b, flags))
 
@@ -170,14 +207,16 @@ def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
 
 @njit
 def curve_nk(P, row, b, flags, vx, vy, vz):
-    """``C(|v.z|)`` (the control variate's curve)."""
-    return _curve3(P, row, b, abs(vz))
+    """``C(|v.z|)`` (the control variate's curve), the context of ``v``'s side."""
+    return _curve3(P, row, b, flags, vz, abs(vz))
 
 
 @njit
 def curve_constant(P, row, b, flags):
     """``C`` takes one value at every cosine: no F82 tint and ``R0 == R90`` or ``p == 0``
-    (every channel)."""
+    (every channel), and no film."""
+    if P[row, b + _FILM_D] > 0.0:
+        return False
     p0 = max(P[row, b + _EXPONENT], 0.0) == 0.0  # as f82_curve1 reads p
     for k in range(3):
         if not (P[row, b + _F82 + k] == 1.0
@@ -188,7 +227,10 @@ def curve_constant(P, row, b, flags):
 
 @njit
 def curve_is_one(P, row, b, flags):
-    """``C == 1`` at every cosine: ``R0 == R90 == 1`` and no F82 tint (every channel)."""
+    """``C == 1`` at every cosine: ``R0 == R90 == 1`` and no F82 tint (every channel),
+    and no film."""
+    if P[row, b + _FILM_D] > 0.0:
+        return False
     for k in range(3):
         if not (P[row, b + _R0 + k] == 1.0 and P[row, b + _R90 + k] == 1.0
                 and P[row, b + _F82 + k] == 1.0):

@@ -20,6 +20,11 @@ than the base (``C <= 1``).  ``albedo`` is exact for a constant curve and otherw
 integrated through the base's sampler (:data:`render.df._combine.ALBEDO_POINTS` QMC
 points).
 
+Under ``thin_film`` (MDL 1.8) the factor takes the film's change of the reflectance of
+the conductor with normal reflectance ``R0`` and edge tint ``R90 f82`` (Gulbrandsen's
+fit), ``C' = saturate(C + shift)`` (:mod:`render.df.thin_film`; the film slots and the
+IOR context are not MDL parameters of this df).
+
 The EDF overload (MDL 1.7, no ``f82_factor``)::
 
     edf directional_factor(color normal_tint = color(1.0), color grazing_tint = color(1.0),
@@ -33,7 +38,8 @@ the ``base``.
 from __future__ import annotations
 
 from render.df._layer import f82_curve1, scale_cosine
-from render.df._signature import Param, Signature
+from render.df._signature import THIN_WALLED, Param, Signature
+from render.df.thin_film import FILM_PARAMS, edge_tint_ior, film_shift
 from render.jit import njit
 from render.program import O_DIRECTIONAL_FACTOR, O_DIRECTIONAL_FACTOR_EDF, df_class
 
@@ -54,14 +60,17 @@ __all__ = [
 # The factor of ScaledBsdf (the interpreter, render.program, evaluates the base and
 # scales its value and sample weight; the pdf is the base's where the product is > 0).
 
-#: ``df::directional_factor`` (the bsdf overload; ``base`` None: MDL's ``bsdf()``)
+#: ``df::directional_factor`` (the bsdf overload; ``base`` None: MDL's ``bsdf()``), plus
+#: the film slots and the renderer's IORs on the ``+z`` and ``-z`` sides (what a
+#: ``thin_film`` over the factor reads)
 SIGNATURE = Signature("bsdf", (
     Param("normal_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("grazing_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("f82_factor", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
     Param("exponent", "float", 5.0, clamp=(0.0, None)),
     Param("base", "bsdf", None),
-))
+    *FILM_PARAMS,
+), context=("ior_outside", "ior_inside"))
 #: the edf overload (MDL 1.7)
 EDF_SIGNATURE = Signature("edf", (
     Param("normal_tint", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
@@ -76,20 +85,46 @@ _R0 = SIGNATURE.offset("normal_tint")
 _R90 = SIGNATURE.offset("grazing_tint")
 _F82 = SIGNATURE.offset("f82_factor")
 _EXPONENT = SIGNATURE.offset("exponent")
+_FILM_D = SIGNATURE.offset("thin_film_thickness")
+_FILM_N = SIGNATURE.offset("thin_film_ior")
+_OUT = SIGNATURE.offset("ior_outside")
+_IN = SIGNATURE.offset("ior_inside")
+
+
+@njit
+def _film3(P, row, b, flags, woz, c):
+    """The shift a ``thin_film`` makes at cosine ``c``
+    (:func:`render.df.thin_film.film_shift`) on the conductor of the curve's normal and
+    edge tints (:func:`~render.df.thin_film.edge_tint_ior` of ``R0`` and ``R90 f82``, per
+    channel), seen from the medium on ``wo``'s side."""
+    inside = woz < 0.0 and (flags & THIN_WALLED) == 0
+    e1 = P[row, b + _IN] if inside else P[row, b + _OUT]
+    n0, k0 = edge_tint_ior(P[row, b + _R0], P[row, b + _R90] * P[row, b + _F82])
+    n1, k1 = edge_tint_ior(P[row, b + _R0 + 1], P[row, b + _R90 + 1] * P[row, b + _F82 + 1])
+    n2, k2 = edge_tint_ior(P[row, b + _R0 + 2], P[row, b + _R90 + 2] * P[row, b + _F82 + 2])
+    return film_shift(c, e1, P[row, b + _FILM_N], P[row, b + _FILM_N + 1],
+                      P[row, b + _FILM_N + 2], n0, n1, n2, k0, k1, k2, P[row, b + _FILM_D])
 
 
 @njit
 def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     """the directional factor: ``C(wo.h)`` per channel, ``h`` the reflection half
     vector (both directions mirrored to ``wo``'s side, then a transmitted ``wi`` through
-    the tangent plane); 0 where ``wo.h < 0``."""
+    the tangent plane); 0 where ``wo.h < 0``.  Under a ``thin_film``,
+    ``saturate(C + shift)``."""
     kh = scale_cosine(wox, woy, woz, wix, wiy, wiz)
     if kh < 0.0:
         return 0.0, 0.0, 0.0
     p = P[row, b + _EXPONENT]
-    return (f82_curve1(kh, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p),
-            f82_curve1(kh, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p),
-            f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p))
+    c0 = f82_curve1(kh, P[row, b + _R0], P[row, b + _R90], P[row, b + _F82], p)
+    c1 = f82_curve1(kh, P[row, b + _R0 + 1], P[row, b + _R90 + 1], P[row, b + _F82 + 1], p)
+    c2 = f82_curve1(kh, P[row, b + _R0 + 2], P[row, b + _R90 + 2], P[row, b + _F82 + 2], p)
+    if P[row, b + _FILM_D] > 0.0:
+        s0, s1, s2 = _film3(P, row, b, flags, woz, kh)
+        c0 = min(max(c0 + s0, 0.0), 1.0)
+        c1 = min(max(c1 + s1, 0.0), 1.0)
+        c2 = min(max(c2 + s2, 0.0), 1.0)
+    return c0, c1, c2
 
 
 @njit
@@ -105,7 +140,9 @@ def edf_scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
 @njit
 def curve_constant(P, row, b, flags):
     """Whether the curve takes one value at every cosine (no F82 tint, and ``R0 = R90``
-    or exponent 0): then the albedo is exact without quadrature."""
+    or exponent 0, and no film): then the albedo is exact without quadrature."""
+    if P[row, b + _FILM_D] > 0.0:
+        return False
     for c in range(3):
         if P[row, b + _F82 + c] != 1.0:
             return False
@@ -132,7 +169,9 @@ def directional_factor(*args, **kwargs):
     from render.program import ProgramEdf
 
     base = kwargs.get("base", args[-1] if args else None)
-    if isinstance(base, ProgramEdf):
+    if isinstance(base, ProgramEdf):  # (the edf overload reads no IOR context)
+        for key in ("ior_outside", "ior_inside", "thin_walled"):
+            kwargs.pop(key, None)
         return DirectionalFactorEdf(*args, **kwargs)
     return DirectionalFactor(*args, **kwargs)
 

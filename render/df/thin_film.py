@@ -27,15 +27,30 @@ and factors to the dfs below them.  Implemented here for ``fresnel_layer`` /
 film on the conductor) and the specular and glossy lobes in ``scatter_reflect_transmit``
 (the film over the material's IOR replaces their Fresnel split: the event is chosen by
 the channels' mean reflectance and weighted ``F_c / P`` or ``(1 - F_c) / (1 - P)``; their
-albedo tables stay the film-less lobe's, within about 1 % of the filmed one's).  On
-every other df the film is a no-op: diffuse, sheen and measured lobes and plain
-reflect/transmit lobes as the spec says, and, **not yet**, the custom curves
-(``custom_curve_layer``, ``directional_factor``) that libbsdf turns into an IOR.
+albedo tables stay the film-less lobe's, within about 1 % of the filmed one's).
+
+Over the custom curves (MDL 1.8: ``custom_curve_layer``, ``color_custom_curve_layer``,
+``directional_factor``) the curve ``C`` is not a Fresnel term, so the film cannot
+replace it; as libbsdf does, the curve is read as the reflectance of an interface
+(``custom_curve_layer``: a dielectric of IOR ``(1 + sqrt(R0)) / (1 - sqrt(R0))``, R0
+clamped to 0.98, :func:`schlick_ior`; ``directional_factor``: a conductor of normal
+reflectance ``R0`` and edge tint ``R90 f82``, Gulbrandsen's fit, :func:`edge_tint_ior`)
+and takes the film's change of that interface's reflectance,
+``C' = saturate(C + film_rgb(d) - film_rgb(0))`` (:func:`film_shift`).  Where the curve
+is that interface's Fresnel term, this is the film's Fresnel replacing it.  One
+departure: libbsdf subtracts the bare interface's Fresnel per channel; here the bare
+reflectance is the same spectral computation at thickness 0 (equal to it for a grey
+``R0``, and the shift vanishes as the thickness does for any ``R0``).
+
+On every other df the film is a no-op: diffuse, sheen and measured lobes and plain
+reflect/transmit lobes, as the spec says.
 
 The film is a bind-time rewrite of the program (:class:`ThinFilm`): it writes its
 thickness and IOR into the affected nodes' film slots (``thin_film_thickness`` and
 ``thin_film_ior``, parameters of those dfs that are not MDL's) and rebuilds their Ĉ
-tables; the kernels of those dfs evaluate :func:`film_reflectance` in place of Fresnel.
+tables (a curve layer whose curve was constant, and so had none, gets one); the kernels
+of those dfs evaluate :func:`film_reflectance` in place of Fresnel, or
+:func:`film_shift` on their curve.
 """
 
 from __future__ import annotations
@@ -135,11 +150,45 @@ def film_rgb(c, n0, f0, f1, f2, s0, s1, s2, k0, k1, k2, d):
     return min(max(r, 0.0), 1.0), min(max(g, 0.0), 1.0), min(max(b, 0.0), 1.0)
 
 
+@njit
+def film_shift(c, n0, f0, f1, f2, s0, s1, s2, k0, k1, k2, d):
+    """What the film changes in the reflectance of its substrate: :func:`film_rgb` at
+    thickness ``d`` minus the same at thickness 0 (the bare interface, seen through the
+    same spectral weighting), per channel.  The curves a film acts on take this shift
+    (libbsdf's ``apply_coating_color_shift``): ``C' = saturate(C + shift)``."""
+    r0, r1, r2 = film_rgb(c, n0, f0, f1, f2, s0, s1, s2, k0, k1, k2, d)
+    b0, b1, b2 = film_rgb(c, n0, f0, f1, f2, s0, s1, s2, k0, k1, k2, 0.0)
+    return r0 - b0, r1 - b1, r2 - b2
+
+
+@njit
+def schlick_ior(r0):
+    """The dielectric IOR whose normal reflectance is ``r0`` (clamped to [0, 0.98]):
+    ``(1 + sqrt(r0)) / (1 - sqrt(r0))``, the substrate a film sees under a custom curve."""
+    q = math.sqrt(min(max(r0, 0.0), 0.98))
+    return (1.0 + q) / (1.0 - q)
+
+
+@njit
+def edge_tint_ior(r, g):
+    """The complex IOR ``(n, k)`` of a conductor with normal reflectance ``r`` and edge
+    tint ``g`` (Gulbrandsen, "Artist friendly metallic Fresnel", JCGT 2014; ``r`` pulled
+    into [0.01, 0.99] as libbsdf does): the substrate a film sees under a
+    ``directional_factor``."""
+    r = 0.01 + 0.98 * min(max(r, 0.0), 1.0)
+    g = min(max(g, 0.0), 1.0)
+    q = math.sqrt(r)
+    n = g * (1.0 - r) / (1.0 + r) + (1.0 - g) * (1.0 + q) / (1.0 - q)
+    k2 = (r * (n + 1.0) * (n + 1.0) - (n - 1.0) * (n - 1.0)) / (1.0 - r)
+    return n, math.sqrt(max(k2, 0.0))
+
+
 # --- the bind-time rewrite ---------------------------------------------------------------
 def _film_ops():
     from render import program as pg
 
-    stop = {pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_SPECULAR, pg.O_SIMPLE_GLOSSY,
+    stop = {pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_CUSTOM_CURVE_LAYER,
+            pg.O_DIRECTIONAL_FACTOR, pg.O_SPECULAR, pg.O_SIMPLE_GLOSSY,
             pg.O_MICROFACET_GGX_SMITH, pg.O_MICROFACET_BECKMANN_SMITH,
             pg.O_MICROFACET_GGX_VCAVITIES, pg.O_MICROFACET_BECKMANN_VCAVITIES}
     through = {pg.O_TINT, pg.O_TINT_RT, pg.O_NORMALIZED_MIX, pg.O_CLAMPED_MIX,
@@ -157,11 +206,28 @@ def _film_offset(op) -> int:
         sig = sys.modules["render.df.fresnel_layer"].COLOR_SIGNATURE
     elif op == pg.O_FRESNEL_FACTOR:
         sig = sys.modules["render.df.fresnel_factor"].SIGNATURE
+    elif op == pg.O_CUSTOM_CURVE_LAYER:  # the float form packs as the colour form
+        sig = sys.modules["render.df.custom_curve_layer"].COLOR_SIGNATURE
+    elif op == pg.O_DIRECTIONAL_FACTOR:
+        sig = sys.modules["render.df.directional_factor"].SIGNATURE
     elif op == pg.O_SPECULAR:
         sig = sys.modules["render.df.specular_bsdf"].SIGNATURE
     else:  # the glossy lobes share MDL's glossy signature
         sig = sys.modules["render.df._microfacet"].microfacet_signature()
     return sig.offset("thin_film_thickness")
+
+
+def _wants_table(prog, k: int) -> bool:
+    """Whether the curve layer ``k`` needs a Ĉ table once its curve varies (a constant
+    curve had none): it has a layer child that is not a mirror (as
+    :func:`render.program._with_chat_table` decides)."""
+    from render import program as pg
+
+    lay = prog.kids[prog.code[k, pg.KID0]]
+    if lay < 0:
+        return False
+    return not (prog.code[lay, pg.OP] == pg.O_SPECULAR
+                and (prog.code[lay, pg.FLAGS] & 3) == 0)
 
 
 class ThinFilm:
@@ -195,8 +261,8 @@ class ThinFilm:
             k = todo.pop()
             op = code[k, pg.OP]
             if op in stop:
-                if op not in (pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR) and (
-                        code[k, pg.FLAGS] & 3) != 2:
+                if op not in (pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_CUSTOM_CURVE_LAYER,
+                              pg.O_DIRECTIONAL_FACTOR) and (code[k, pg.FLAGS] & 3) != 2:
                     continue  # a plain reflect or transmit lobe has no Fresnel to change
                 at = code[k, pg.BASE] + _film_offset(op)
                 P[:, at] = np.broadcast_to(d, (rows, 1))[:, 0]
@@ -207,8 +273,12 @@ class ThinFilm:
                 todo.extend(int(c) for c in prog.kids[k0:k0 + code[k, pg.NKIDS]] if c >= 0)
         tables = prog.tables
         for k in hit:  # the coat's curve changed: its Ĉ table with it
-            if code[k, pg.OP] != pg.O_FRESNEL_LAYER or code[k, pg.TABLE] == pg.CHAT_NONE:
+            if code[k, pg.OP] not in (pg.O_FRESNEL_LAYER, pg.O_CUSTOM_CURVE_LAYER):
                 continue
+            if not np.any(d > 0.0):
+                continue  # no film: the curve and its table stand
+            if code[k, pg.TABLE] == pg.CHAT_NONE and not _wants_table(prog, k):
+                continue  # no coat, or a mirror coat: libbsdf's factor is the bound
             if rows > 1 and not np.all(P == P[:1]):
                 code[k, pg.TABLE] = pg.CHAT_NONE
                 continue
