@@ -618,6 +618,7 @@ _STRUCT_SIGNATURES: dict[str, tuple[Callable, list[MdlParam], MdlType]] = {
         MdlParam("ior", MdlType("color"), False),
         MdlParam("volume", _t("material_volume"), False),
         MdlParam("geometry", _t("material_geometry"), False),
+        MdlParam("hair", _t("hair_bsdf"), False),
     ], _t("material")),
     "material_surface": (material_surface, [
         MdlParam("scattering", _t("bsdf"), False),

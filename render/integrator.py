@@ -108,11 +108,38 @@ def _straight_through_candidate(material, two_faced: bool) -> bool:
     return True
 
 
+def _is_strands(surface) -> bool:
+    from render.hair import Strands
+
+    return isinstance(surface, Strands)
+
+
+def _check_hair(obj) -> None:
+    """Hair strands take a constant hair bsdf, and nothing of a surface's geometry."""
+    mat = obj.material
+    where = f"object {obj.name!r} (hair strands)"
+    if mat.hair is not None:
+        for n in _df_nodes(mat.hair):
+            for key, value in n.kwargs.items():
+                if callable(value):
+                    raise ValueError(f"{where}: df::{n.name}({key}) must be a constant: a hair "
+                                     "bsdf whose arguments vary along the strands is not "
+                                     "rendered yet")
+    if _is_emissive(mat):
+        raise ValueError(f"{where}: hair does not emit; give the emission to a surface")
+    if _has_cutout(mat) or mat.geometry.displacement is not None:
+        raise ValueError(f"{where}: cutout_opacity and displacement apply to surfaces, not "
+                         "to hair; leave material.geometry at its default")
+
+
 def _surface_is_closed(surface) -> bool:
     """Whether an object's base surface encloses a volume (tested on a coarse base mesh:
     displacement and adaptive dicing keep a closed surface closed, but their T-junctions
     would fail a topological test of the diced triangles)."""
     from displacement.dice import is_mesh_surface
+
+    if _is_strands(surface):
+        return False
 
     if is_mesh_surface(surface):
         mesh = surface.base_mesh()
@@ -182,6 +209,10 @@ class Integrator:
         n_obj = len(self.objects)
         # scene-relative, plus the float32 rounding of the largest coordinate
         self.eps = RAY_EPS * geometry.extent + 4e-7 * float(np.abs(geometry.vertices).max())
+        #: hair strands (render.hair), shaded by their material's hair bsdf in the kernel
+        self.hair = np.array([_is_strands(o.surface) for o in self.objects], dtype=bool)
+        for k in np.flatnonzero(self.hair):
+            _check_hair(self.objects[k])
         lights = list(scene.lights)
         #: each emissive object's triangles as one light (its emission and total area);
         #: next-event estimation samples them in groups (AreaLight.groups)
@@ -210,7 +241,7 @@ class Integrator:
         self.two_faced = np.array(
             [bool(getattr(m, "thin_walled", False))
              and not getattr(getattr(m, "backface", None), "is_default", True) for m in mats],
-            dtype=bool)
+            dtype=bool) & ~self.hair
         self.max_depth = self.settings.max_depth if self.settings.max_depth > 0 else 1 << 30
         # interfaces and media: closed non-thin-walled objects enter the medium stack
         self.encloses = np.array([_may_enclose(m) and _surface_is_closed(o.surface)
@@ -240,12 +271,15 @@ class Integrator:
         self.bound = np.array([_varying(m) or (_is_emissive(m) and const_emit[k] is None
                                                and not self.emit_program[k])
                                for k, m in enumerate(mats)], dtype=bool)
+        self.bound &= ~self.hair
         self.emit_program &= ~self.bound
         # the program slots: bsdfs (2k front, 2k + 1 back), then edfs (EDF_SLOTS + 2k,
         # + 1), then the media's phase functions (after both)
         self.programs = [None] * (4 * n_obj)
         for k in range(n_obj):
-            if not self.bound[k]:
+            if self.hair[k]:
+                self.programs[2 * k] = self._hair_program(k)
+            elif not self.bound[k]:
                 self.programs[2 * k] = self._constant_program(k, back=False)
                 if self.two_faced[k]:  # slot 2k + 1 is read for two-faced objects only
                     self.programs[2 * k + 1] = self._constant_program(k, back=True)
@@ -285,6 +319,18 @@ class Integrator:
                              np.array([[0.0, 1.0, 0.0]]), self.objects[k].transform)
         return node.bind(state, ior_outside=1.0, ior_inside=float(np.mean(mat.ior)),
                          thin_walled=bool(mat.thin_walled)).program
+
+    def _hair_program(self, k: int):
+        """Object ``k``'s hair bsdf program (its material's ``hair``; None: black)."""
+        from displacement.state import ShadingState
+
+        node = self.objects[k].material.hair
+        if node is None:
+            return None
+        one = np.array([[0.0, 0.0, 1.0]])
+        state = ShadingState(np.zeros((1, 3)), one, np.zeros((1, 2)), np.array([[1.0, 0.0, 0.0]]),
+                             np.array([[0.0, 1.0, 0.0]]), self.objects[k].transform)
+        return node.bind(state).program
 
     def _edf_program(self, k: int, back: bool):
         """Object ``k``'s edf program (front surface, or a thin-walled backface), one
@@ -335,6 +381,7 @@ class Integrator:
         flags[self.encloses] |= kern.ENCLOSES
         flags[self.two_faced] |= kern.TWO_FACED
         flags[self.bound] |= kern.BOUND
+        flags[self.hair] |= kern.HAIR
         if self.encloses.any():
             flags[self.ior_sensitive] |= kern.IOR_SENSITIVE
         opacity = np.ones(n_obj)
@@ -409,7 +456,8 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit,
-            np.ascontiguousarray([o.linear.ravel() for o in self.objects]), lt.face_light,
+            np.ascontiguousarray([o.linear.ravel() for o in self.objects]), geo.curves,
+            geo.curve_first, lt.face_light,
             media,
             lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist,
             self.camera.ray_map, scalars)

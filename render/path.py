@@ -40,6 +40,7 @@ from render.camera import camera_ray
 from render.df._kernel_common import unitize
 from render.df.measured_edf import O2L as MEASURED_O2L
 from render.df.spot_edf import SIGNATURE as _SPOT
+from render.hair import curve_frame, exit_point
 from render.jit import njit
 from render.light_sampling import (
     EVERY_DELTA,
@@ -125,6 +126,9 @@ NA = 10
 #: whose edfs read the rotation from object space (a global spot or measured edf)
 CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8, 16, 32, 64
 EMIT_PROG, EMIT_GLOBAL = 128, 256
+#: hair strands (render.hair): the object's "triangles" are curve segments, its program
+#: its material's hair bsdf
+HAIR = 512
 #: the edfs whose lobe may be fixed in object space (``object_to_local_ij`` context slots)
 OBJECT_EDFS = np.array([O_SPOT_EDF, O_MEASURED_EDF])
 #: one Embree call in this many is timed (the share of time inside Embree)
@@ -157,6 +161,8 @@ Tables = namedtuple(
         # EMIT_PROG: the intensity of the front and back edfs (per area in power mode)
         "emit_hit",
         "obj_linear",  # (k, 9) each object's linear map to world, row-major
+        "curves",  # (s, 16) the curve segments' Bézier points and radii (render.hair)
+        "curve_first",  # (k,) int64 each hair object's first row of curves (-1: none)
         "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
         "medium",  # (m, 12) sigma_a, sigma_s, sigma_t, emission per channel
         # the lights (render.light_sampling.light_table): a row per light and per node of
@@ -451,6 +457,8 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 t_hit = np.inf
             # ---- the medium of the segment: attenuate, or scatter inside it
             scattered = False
+            hair = False
+            radius = 0.0
             t_event = 0.0
             med = -1
             u_flight, u_roulette = 0.0, 0.0
@@ -504,9 +512,16 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 # ---- a surface
                 k = face_object[f]
                 flags = obj_flags[k]
-                px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
-                    packed, faces, face_normal, f, hb1, hb2)
-                gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+                if flags & HAIR:  # a strand: its frame at the hit (render.hair)
+                    px, py, pz = ox + t_hit * dx, oy + t_hit * dy, oz + t_hit * dz
+                    nx, ny, nz, tx, ty, tz, radius = curve_frame(
+                        tb.curves, tb.curve_first[k] + f - face_offset[k], hb1, px, py, pz)
+                    gx, gy, gz, uu, uv = nx, ny, nz, hb1, 0.0
+                    hair = True
+                else:
+                    px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
+                        packed, faces, face_normal, f, hb1, hb2)
+                    gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
                 g_wo = -_dot(dx, dy, dz, gx, gy, gz)
                 front = g_wo > 0.0
                 slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
@@ -621,10 +636,19 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 c0, c1, c2 = b0 * f0 * l0 * w, b1 * f1 * l1 * w, b2 * f2 * l2 * w
                 if not (c0 > 0.0 or c1 > 0.0 or c2 > 0.0):
                     continue
+                hx, hy, hz = px, py, pz
+                shift_l = 0.0
+                if hair:  # from where the shadow ray leaves the fibre
+                    hx, hy, hz, ex, ey, ez = exit_point(px, py, pz, nx, ny, nz, tx, ty, tz,
+                                                        radius, lx, ly, lz)
+                    hx, hy, hz = hx + eps * ex, hy + eps * ey, hz + eps * ez
+                elif not scattered:  # off the surface, on the light's side
+                    side = 1.0 if _dot(lx, ly, lz, gx, gy, gz) >= 0.0 else -1.0
+                    hx, hy, hz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+                    shift_l = _parallel_shift(eps, gx, gy, gz, lx, ly, lz)
                 _shadow_record(eps, sf, si, sso, ssior, n_shadow, cso, csior, nstk, lane,
-                               segment - 1, px, py, pz, gx, gy, gz, lx, ly, lz, ldist, c0, c1,
-                               c2, lface, q0, q1, q2, not scattered,
-                               0.0 if scattered else _parallel_shift(eps, gx, gy, gz, lx, ly, lz))
+                               segment - 1, px, py, pz, hx, hy, hz, lx, ly, lz, ldist, c0, c1,
+                               c2, lface, q0, q1, q2, shift_l)
                 if across:
                     sn = si[n_shadow, S_NSTK]
                     if front:
@@ -686,6 +710,11 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 side = 1.0 if g_new >= 0.0 else -1.0
                 ox, oy, oz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
                 shift = _parallel_shift(eps, gx, gy, gz, nx2, ny2, nz2)
+                if hair:  # on through the fibre: from where it leaves it
+                    ox, oy, oz, ex, ey, ez = exit_point(px, py, pz, nx, ny, nz, tx, ty, tz,
+                                                        radius, nx2, ny2, nz2)
+                    ox, oy, oz = ox + eps * ex, oy + eps * ey, oz + eps * ez
+                    shift = 0.0
             dx, dy, dz = nx2, ny2, nz2
             if straight:
                 seg = dist_v
@@ -786,15 +815,12 @@ def _park(plf, pli, pso, psior, p, cso, csior, lane, ox, oy, oz, dx, dy, dz, b0,
 
 @njit(inline="always")
 def _shadow_record(eps, sf, si, sso, ssior, r, cso, csior, nstk, lane, segment, px, py, pz,
-                   gx, gy, gz, lx, ly, lz, ldist, c0, c1, c2, face, bary0, bary1, bary2,
-                   offset, shift_in):
-    """Write shadow record ``r``: a ray from p toward the light sample; ``offset``: push
-    the origin off the surface (normal ``g``) on the light's side, else start at p (in a
-    medium).  The record starts untraced (``S_HIT`` -1) with the lane's stack."""
-    qx, qy, qz = px, py, pz
-    if offset:
-        side = 1.0 if _dot(lx, ly, lz, gx, gy, gz) >= 0.0 else -1.0
-        qx, qy, qz = px + side * eps * gx, py + side * eps * gy, pz + side * eps * gz
+                   qx, qy, qz, lx, ly, lz, ldist, c0, c1, c2, face, bary0, bary1, bary2,
+                   shift_in):
+    """Write shadow record ``r``: a ray toward the light sample from ``q`` (p pushed off
+    the surface on the light's side, a hair fibre's far side, or p itself in a medium),
+    aimed at the light point seen from p.  The record starts untraced
+    (``S_HIT`` -1) with the lane's stack."""
     finite = ldist < INFINITE_DISTANCE
     if finite:  # aim from the offset origin at the light point itself
         tx, ty, tz = px + lx * ldist, py + ly * ldist, pz + lz * ldist

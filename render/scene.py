@@ -444,10 +444,24 @@ class Geometry:
 
     @classmethod
     def build(cls, scene: Scene, progress: bool = False) -> Geometry:
+        from render.embree import Curves
+        from render.hair import Strands
+
         parts = []
         stats = []
-        for obj in scene.objects:
-            part, st = _object_triangles(obj, scene.camera, scene.settings)
+        strands = {}  # object -> (world control points, curve table rows)
+        for k, obj in enumerate(scene.objects):
+            if isinstance(obj.surface, Strands):
+                pts, rows = obj.surface.world(obj.transform)
+                strands[k] = (pts, rows)
+                z3 = np.zeros((0, 3))
+                # one placeholder triangle per curve segment: the kernels index every
+                # primitive's object, light and normal by the global triangle number
+                part = (z3, np.zeros((len(rows), 3), dtype=np.int64), np.zeros((0, 2)), z3, z3,
+                        z3)
+                st = {"diced": False, "triangles": 0, "curve_segments": len(rows)}
+            else:
+                part, st = _object_triangles(obj, scene.camera, scene.settings)
             st["name"] = obj.name
             parts.append(part)
             stats.append(st)
@@ -458,10 +472,15 @@ class Geometry:
             raise ValueError(f"nothing to trace: every object ({names}) has zero area (a "
                              "displacement that collapses a surface to a line or a point "
                              "leaves no triangles)")
+        if not any(len(p[0]) for p in parts):  # curves only: one vertex for the placeholders
+            z = np.zeros((1, 3))
+            parts[0] = (z, parts[0][1], np.zeros((1, 2)), np.array([[0.0, 0.0, 1.0]]),
+                        np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
         v_off = np.cumsum([0] + [len(p[0]) for p in parts])
         f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
         vertices = np.concatenate([p[0] for p in parts])
-        faces = np.concatenate([p[1] + v_off[i] for i, p in enumerate(parts)]).astype(np.int64)
+        faces = np.concatenate([p[1] + (0 if i in strands else v_off[i])
+                                for i, p in enumerate(parts)]).astype(np.int64)
         uv = np.concatenate([p[2] for p in parts])
         normals = np.concatenate([p[3] for p in parts])
         tu = np.concatenate([p[4] for p in parts])
@@ -477,12 +496,28 @@ class Geometry:
         ng_u, ok = unitize(ng)
         ns_u, ok2 = unitize(nsum)
         face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
-        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+        boxes = [(p[0].min(axis=0), p[0].max(axis=0)) for i, p in enumerate(parts)
+                 if len(p[0]) and i not in strands]
+        for k in strands:
+            boxes.append(scene.objects[k].surface.bounds(scene.objects[k].transform))
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         from render.embree import EmbreeScene
 
-        embree = EmbreeScene([(p[0], p[1]) for p in parts])
-        return cls(
+        embree = EmbreeScene([Curves(strands[i][0], scene.objects[i].surface.segments,
+                                     scene.objects[i].surface.kind) if i in strands
+                              else (p[0], p[1]) for i, p in enumerate(parts)])
+        #: the curve table (render.hair): one row per segment, and each object's first row
+        curve_rows = [strands[k][1] for k in sorted(strands)]
+        curves = (np.ascontiguousarray(np.vstack(curve_rows)) if curve_rows
+                  else np.zeros((1, 16)))
+        curve_first = np.full(len(parts), -1, dtype=np.int64)
+        row = 0
+        for k in sorted(strands):
+            curve_first[k] = row
+            row += len(strands[k][1])
+        geo = cls(
             embree,
             vertices,
             normals,
@@ -497,6 +532,13 @@ class Geometry:
             0.5 * (lo + hi),
             stats,
         )
+        geo.curves, geo.curve_first = curves, curve_first
+        return geo
+
+    #: (s, 16) the curve segments' Bézier control points and radii (render.hair), and the
+    #: first row of each object's segments (-1: triangles)
+    curves: Any = None
+    curve_first: Any = None
 
     @property
     def triangle_count(self) -> int:
@@ -1126,6 +1168,20 @@ class _Parser:
         except ValueError as e:
             raise self.error(f"{section}[{i}]: {e}", section, i, "scale") from None
 
+    def curves(self, spec, i: int):
+        """``curves = { type = "polylines" | "bezier" | "fringe", ... }``: hair strands
+        (:func:`render.hair.from_table`)."""
+        from render.hair import StrandsError, from_table
+
+        if not isinstance(spec, dict):
+            raise self.error(f"objects[{i}]: curves must be a table {{ type = \"polylines\", "
+                             f"points = [...], radius = ... }}, got {spec!r}", "objects", i,
+                             "curves")
+        try:
+            return from_table(spec)
+        except (StrandsError, TypeError) as e:
+            raise self.error(f"objects[{i}]: curves: {e}", "objects", i, "curves") from None
+
     def surface(self, spec, i: int):
         from displacement import surfaces
         from displacement.view import make_surface
@@ -1250,6 +1306,7 @@ class _Parser:
             "name",
             "surface",
             "mesh",
+            "curves",
             "material",
             "translate",
             "rotate",
@@ -1262,11 +1319,15 @@ class _Parser:
             "normal_map_bits",
         }
         self._check_keys(t, allowed, "objects", i)
-        if ("surface" in t) == ("mesh" in t):
+        if sum(k in t for k in ("surface", "mesh", "curves")) != 1:
             raise self.error(
-                f"objects[{i}]: give exactly one of surface = NAME or mesh = PATH", "objects", i
+                f"objects[{i}]: give exactly one of surface = NAME, mesh = PATH or curves = "
+                "{ type = ... } (hair strands)", "objects", i
             )
-        surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
+        if "curves" in t:
+            surface = self.curves(t["curves"], i)
+        else:
+            surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
         if "material" not in t:
             raise self.error(
                 f"objects[{i}]: missing material (an MDL call expression)", "objects", i
