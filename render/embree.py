@@ -16,7 +16,8 @@ Scene handle
     is alive and not closed: keep the object referenced for as long as any kernel runs.
 Geometry
     One Embree triangle geometry per mesh, ``geom_id`` = the mesh's index in the list,
-    ``prim_id`` = the row of its face array.
+    ``prim_id`` = the row of its face array; or one round-curve geometry per
+    :data:`Curves` item (``prim_id`` = its segment; hair strands, :mod:`render.hair`).
 Rays
     float32 at the boundary (arguments are rounded on the way in).  Origin ``o``,
     direction ``d`` (need not be unit: ``t`` is measured in units of ``|d|``), and the
@@ -33,7 +34,9 @@ Hits
     ``(t, u, v, prim_id, geom_id, ng_x, ng_y, ng_z)``: ``o + t d`` is the hit point,
     equal to ``(1-u-v) v0 + u v1 + v v2`` for the triangle's vertices ``v0 v1 v2``, and
     ``ng`` is the unnormalized geometric normal ``(v1 - v0) x (v2 - v0)`` (the side
-    from which the vertices turn counter-clockwise).  A miss returns
+    from which the vertices turn counter-clockwise).  On a round curve ``u`` is the
+    curve parameter within the segment and ``ng`` the tube's outward normal (also for a
+    ray that meets the tube from inside: then ``ng . d > 0``).  A miss returns
     ``geom_id = prim_id = MISS`` (-1), ``t = tfar`` as given and ``u = v = ng = 0``.
 Scratch
     Embree reads and writes an ``RTCRayHit`` record, 16-byte aligned.  Each thread owns
@@ -280,21 +283,27 @@ def _as_mesh(k: int, mesh) -> tuple[np.ndarray, np.ndarray]:
 
 #: round curves for :class:`EmbreeScene`: ``points`` (n, 4) x, y, z, radius; ``segments``
 #: (m,) the first control point of each segment; ``kind`` "linear" (2 points a segment,
-#: ``ROUND_LINEAR_CURVE``) or "bezier" (4, ``ROUND_BEZIER_CURVE``).  A hit's ``u`` is the
-#: curve parameter within the segment, ``prim_id`` the segment, ``ng`` the tube's normal.
+#: ``ROUND_LINEAR_CURVE``: cones joined by spheres, one at every point) or "bezier" (4,
+#: ``ROUND_BEZIER_CURVE``: a swept sphere, open at the curve's ends).  A hit's ``u`` is
+#: the curve parameter within the segment, ``prim_id`` the segment, ``ng`` the tube's
+#: outward normal.  Measured (tests/render/test_embree.py): Embree reports the far wall
+#: of a tube to a ray that starts inside it, and misses a tube seen exactly along its
+#: axis (a ray parallel to a straight segment).
 Curves = namedtuple("Curves", "points segments kind")
 
 
 def _as_curves(k: int, c: Curves) -> tuple[np.ndarray, np.ndarray]:
     """Check curve geometry ``k``; its float32 (n, 4) points and uint32 segment indices."""
+    if np.any(np.asarray(c.segments) < 0):
+        raise ValueError(f"curves {k}: segment indices must be >= 0")
     p = np.ascontiguousarray(c.points, dtype=np.float32)
     s = np.ascontiguousarray(c.segments, dtype=np.uint32)
     if p.ndim != 2 or p.shape[1] != 4 or s.ndim != 1:
         raise ValueError(f"curves {k}: points must be (n, 4) and segments (m,), got "
                          f"{p.shape} and {s.shape}")
-    span = 2 if c.kind == "linear" else 4
     if c.kind not in ("linear", "bezier"):
         raise ValueError(f"curves {k}: kind must be 'linear' or 'bezier', got {c.kind!r}")
+    span = 2 if c.kind == "linear" else 4
     if len(s) and int(s.max()) + span > len(p):
         raise ValueError(f"curves {k}: a segment starts at point {int(s.max())}, past the "
                          f"{len(p)} points")

@@ -208,7 +208,7 @@ class Integrator:
         self.aovs = tuple(aovs)
         n_obj = len(self.objects)
         # scene-relative, plus the float32 rounding of the largest coordinate
-        self.eps = RAY_EPS * geometry.extent + 4e-7 * float(np.abs(geometry.vertices).max())
+        self.eps = RAY_EPS * geometry.extent + 4e-7 * geometry.coord_max
         #: hair strands (render.hair), shaded by their material's hair bsdf in the kernel
         self.hair = np.array([_is_strands(o.surface) for o in self.objects], dtype=bool)
         for k in np.flatnonzero(self.hair):
@@ -440,7 +440,8 @@ class Integrator:
         scalars[kern.SC_MEDIA] = float(bool(self.media))
         scalars[kern.SC_AOV] = float(bool(self.aovs))
         scalars[kern.SC_BIND] = float(self.may_bind)
-        scalars[kern.SC_PASS] = float(bool(self.passable.any()))
+        # hair: shadow rays pass a tube they meet from inside (render.hair)
+        scalars[kern.SC_PASS] = float(bool(self.passable.any() or self.hair.any()))
         scalars[kern.SC_CAM:kern.SC_CAM + 3] = self.camera.position
         scalars[kern.SC_FWD:kern.SC_FWD + 3] = self.camera.forward
         scalars[kern.SC_WIDTH] = float(self.camera.width)
@@ -466,8 +467,7 @@ class Integrator:
     def _scene_disk(self) -> float:
         """pi r^2 of the scene's bounding sphere (the cross-section a distant light
         covers, for its power)."""
-        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
-        return np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
+        return np.pi * (0.5 * self.geo.extent) ** 2
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):

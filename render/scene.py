@@ -425,7 +425,16 @@ class Geometry:
         Diagonal of the scene's bounding box (ray offsets scale with it).
     center : (3,) float64
     stats : list of dict
-        Per object: triangle count, whether it was diced, and the dicer's statistics.
+        Per object: triangle count, whether it was diced, and the dicer's statistics
+        (hair: ``curve_segments``, ``strands``, ``curve_kind``).
+    curves : (s, 16) float64
+        The hair segments' curve table (:mod:`render.hair`); a hair object's segments
+        also have placeholder rows in ``faces`` (never traced), so that every
+        primitive is ``face_offset[geomID] + primID``.
+    curve_first : (k,) int64
+        Each hair object's first row of ``curves`` (-1: a triangle mesh).
+    coord_max : float
+        The largest absolute world coordinate (ray offsets cover its float32 rounding).
     """
 
     embree: Any
@@ -442,24 +451,36 @@ class Geometry:
     center: np.ndarray
     stats: list
 
+    #: (s, 16) the hair segments' Bézier control points and radii in world space
+    #: (:func:`render.hair.Strands.world`; one row of zeros when there are none)
+    curves: np.ndarray = field(default_factory=lambda: np.zeros((1, 16)))
+    #: (k,) int64 each hair object's first row of ``curves`` (-1: a triangle mesh)
+    curve_first: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: the largest absolute world coordinate of any vertex or control point
+    coord_max: float = 0.0
+
     @classmethod
     def build(cls, scene: Scene, progress: bool = False) -> Geometry:
-        from render.embree import Curves
-        from render.hair import Strands
+        from render.embree import Curves, EmbreeScene
+        from render.hair import Strands, StrandsError
 
         parts = []
         stats = []
         strands = {}  # object -> (world control points, curve table rows)
         for k, obj in enumerate(scene.objects):
             if isinstance(obj.surface, Strands):
-                pts, rows = obj.surface.world(obj.transform)
+                try:
+                    pts, rows = obj.surface.world(obj.transform)
+                except StrandsError as e:
+                    raise ValueError(f"object {obj.name!r} (hair strands): {e}") from None
                 strands[k] = (pts, rows)
                 z3 = np.zeros((0, 3))
-                # one placeholder triangle per curve segment: the kernels index every
-                # primitive's object, light and normal by the global triangle number
+                # a placeholder triangle per curve segment (never traced: Embree gets the
+                # curves): the kernels find every primitive's object by its global number
                 part = (z3, np.zeros((len(rows), 3), dtype=np.int64), np.zeros((0, 2)), z3, z3,
                         z3)
-                st = {"diced": False, "triangles": 0, "curve_segments": len(rows)}
+                st = {"diced": False, "triangles": 0, "curve_segments": len(rows),
+                      "strands": obj.surface.strand_count, "curve_kind": obj.surface.kind}
             else:
                 part, st = _object_triangles(obj, scene.camera, scene.settings)
             st["name"] = obj.name
@@ -472,10 +493,12 @@ class Geometry:
             raise ValueError(f"nothing to trace: every object ({names}) has zero area (a "
                              "displacement that collapses a surface to a line or a point "
                              "leaves no triangles)")
-        if not any(len(p[0]) for p in parts):  # curves only: one vertex for the placeholders
-            z = np.zeros((1, 3))
-            parts[0] = (z, parts[0][1], np.zeros((1, 2)), np.array([[0.0, 0.0, 1.0]]),
-                        np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+        if not any(len(p[0]) for i, p in enumerate(parts) if i not in strands):
+            # hair only: one vertex for the placeholders to index
+            i = min(strands)
+            parts[i] = (np.zeros((1, 3)), parts[i][1], np.zeros((1, 2)),
+                        np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]),
+                        np.array([[0.0, 1.0, 0.0]]))
         v_off = np.cumsum([0] + [len(p[0]) for p in parts])
         f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
         vertices = np.concatenate([p[0] for p in parts])
@@ -498,51 +521,39 @@ class Geometry:
         face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
         boxes = [(p[0].min(axis=0), p[0].max(axis=0)) for i, p in enumerate(parts)
                  if len(p[0]) and i not in strands]
-        for k in strands:
-            boxes.append(scene.objects[k].surface.bounds(scene.objects[k].transform))
+        for pts, _ in strands.values():
+            r = pts[:, 3:4]
+            boxes.append(((pts[:, :3] - r).min(axis=0), (pts[:, :3] + r).max(axis=0)))
         lo = np.min([b[0] for b in boxes], axis=0)
         hi = np.max([b[1] for b in boxes], axis=0)
         extent = float(np.linalg.norm(hi - lo)) or 1.0
-        from render.embree import EmbreeScene
+        coord_max = max(float(np.abs(b).max()) for box in boxes for b in box)
 
         embree = EmbreeScene([Curves(strands[i][0], scene.objects[i].surface.segments,
                                      scene.objects[i].surface.kind) if i in strands
                               else (p[0], p[1]) for i, p in enumerate(parts)])
-        #: the curve table (render.hair): one row per segment, and each object's first row
-        curve_rows = [strands[k][1] for k in sorted(strands)]
-        curves = (np.ascontiguousarray(np.vstack(curve_rows)) if curve_rows
-                  else np.zeros((1, 16)))
+        # the curve table: one row per segment, each hair object's rows together
         curve_first = np.full(len(parts), -1, dtype=np.int64)
-        row = 0
+        rows = [np.zeros((1, 16))]
+        count = 0
         for k in sorted(strands):
-            curve_first[k] = row
-            row += len(strands[k][1])
-        geo = cls(
-            embree,
-            vertices,
-            normals,
-            tu,
-            tv,
-            uv,
-            faces,
-            face_object,
-            face_normal,
-            f_off,
-            extent,
-            0.5 * (lo + hi),
-            stats,
-        )
-        geo.curves, geo.curve_first = curves, curve_first
-        return geo
-
-    #: (s, 16) the curve segments' Bézier control points and radii (render.hair), and the
-    #: first row of each object's segments (-1: triangles)
-    curves: Any = None
-    curve_first: Any = None
+            curve_first[k] = count
+            rows.append(strands[k][1])
+            count += len(strands[k][1])
+        curves = np.ascontiguousarray(np.vstack(rows[1:] if strands else rows))
+        return cls(embree, vertices, normals, tu, tv, uv, faces, face_object, face_normal,
+                   f_off, extent, 0.5 * (lo + hi), stats, curves=curves,
+                   curve_first=curve_first, coord_max=coord_max)
 
     @property
     def triangle_count(self) -> int:
-        return len(self.faces)
+        """Triangles traced (the placeholders of hair segments not counted)."""
+        return len(self.faces) - self.curve_segment_count
+
+    @property
+    def curve_segment_count(self) -> int:
+        """Hair curve segments traced (:mod:`render.hair`)."""
+        return sum(int(st.get("curve_segments", 0)) for st in self.stats)
 
     @property
     def packed(self) -> np.ndarray:
