@@ -62,8 +62,8 @@ import numpy as np
 from render.df._kernel_common import unitize
 from render.jit import njit
 
-__all__ = ["Strands", "StrandsError", "fringe", "from_table", "curve_point", "hair_hit",
-           "CURVE_COLUMNS", "LINEAR", "BEZIER", "MIN_RADIUS_ULPS"]
+__all__ = ["Strands", "StrandsError", "fringe", "from_table", "check_hair_bsdf", "curve_point",
+           "hair_hit", "CURVE_COLUMNS", "LINEAR", "BEZIER", "MIN_RADIUS_ULPS"]
 
 LINEAR, BEZIER = "linear", "bezier"
 #: columns of a row of the curve table: four control points (x, y, z, radius)
@@ -285,8 +285,8 @@ def _radii(r, k: int, i: int, per_point: bool) -> np.ndarray:
     if not ok.all():
         j = int(np.flatnonzero(~ok)[0])
         where = f"strand {i + 1}, point {j + 1}" if per_point else f"strand {i + 1}"
-        raise StrandsError(f"{where}: radius must be a finite number > 0, got {out[j]!r}", key,
-                           i, j if per_point else None)
+        raise StrandsError(f"{where}: radius must be a finite number > 0, got {float(out[j])!r}",
+                           key, i, j if per_point else None)
     return out
 
 
@@ -310,7 +310,7 @@ def _check_segments(p: np.ndarray, i: int, step: int) -> None:
         j = int(bad[0])
         raise StrandsError(f"strand {i + 1}, points {3 * j + 1} to {3 * j + 4}: a zero-length "
                            "Bézier segment (its four control points coincide); remove three "
-                           "of them", "points", i, 3 * j + 1)
+                           "of them", "points", i, 3 * j)
 
 
 def fringe(start=(-0.5, 0.0, 0.0), end=(0.5, 0.0, 0.0), count: int = 64,
@@ -394,8 +394,8 @@ def from_table(spec: dict) -> Strands:
     kind = spec.pop("type", None)
     kinds = ("polylines", "bezier", "fringe")
     if kind not in kinds:
-        raise StrandsError(f"curves: type must be one of {', '.join(map(repr, kinds))}, got "
-                           f"{kind!r}", "type")
+        raise StrandsError(f"type must be one of {', '.join(map(repr, kinds))}, got {kind!r}",
+                           "type")
     allowed = _FRINGE_KEYS if kind == "fringe" else frozenset({"points", "radius", "radii"})
     unknown = sorted(set(spec) - allowed)
     if unknown:
@@ -403,18 +403,31 @@ def from_table(spec: dict) -> Strands:
 
         close = difflib.get_close_matches(unknown[0], sorted(allowed), n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise StrandsError(f"curves ({kind}): unknown key {unknown[0]!r}{hint}; keys: "
+        raise StrandsError(f"unknown key {unknown[0]!r}{hint} for type {kind!r}; keys: "
                            f"{', '.join(sorted(allowed))}", unknown[0])
     if kind == "fringe":
         return fringe(**spec)
     if "points" not in spec:
-        raise StrandsError(f"curves ({kind}): missing points, a list of strands, each a list "
-                           "of [x, y, z] points", "type")
+        raise StrandsError(f"type {kind!r} needs points: a list of strands, each a list of "
+                           "[x, y, z] points", "type")
     if "radius" in spec and "radii" in spec:
-        raise StrandsError(f"curves ({kind}): give radius (one for every point) or radii (a "
-                           "list per strand), not both", "radii")
+        raise StrandsError("give radius (one for every point) or radii (a list per strand), "
+                           "not both", "radii")
     build = Strands.polylines if kind == "polylines" else Strands.bezier
     return build(spec["points"], spec.get("radius", 0.001), spec.get("radii"))
+
+
+def check_hair_bsdf(node) -> None:
+    """Raise ValueError where a material's ``hair`` cannot be rendered: an argument that
+    varies (a function of the state: the kernel binds a hair bsdf once, for every strand
+    of the object).  ``None`` (MDL's black ``hair_bsdf()``) is fine."""
+    if node is None:
+        return
+    for key, value in node.kwargs.items():
+        if callable(value):
+            raise ValueError(f"df::{node.name}: {key} must be a constant (one value for all "
+                             "the object's strands); arguments that vary along a strand are "
+                             "not rendered")
 
 
 # ------------------------------------------------------------------------ kernels

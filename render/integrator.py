@@ -73,9 +73,11 @@ from types import SimpleNamespace
 import numpy as np
 
 from render import embree
+from render import material as M
 from render import path as kern
 from render.film import Film
 from render.frame import Frame, mirror_z
+from render.hair import check_hair_bsdf
 from render.light_sampling import KINDS, MAX_EVERY_DELTA, light_table
 from render.lights import AreaLight, LightSet
 from render.numerics import dot
@@ -112,24 +114,6 @@ def _is_strands(surface) -> bool:
     from render.hair import Strands
 
     return isinstance(surface, Strands)
-
-
-def _check_hair(obj) -> None:
-    """Hair strands take a constant hair bsdf, and nothing of a surface's geometry."""
-    mat = obj.material
-    where = f"object {obj.name!r} (hair strands)"
-    if mat.hair is not None:
-        for n in _df_nodes(mat.hair):
-            for key, value in n.kwargs.items():
-                if callable(value):
-                    raise ValueError(f"{where}: df::{n.name}({key}) must be a constant: a hair "
-                                     "bsdf whose arguments vary along the strands is not "
-                                     "rendered yet")
-    if _is_emissive(mat):
-        raise ValueError(f"{where}: hair does not emit; give the emission to a surface")
-    if _has_cutout(mat) or mat.geometry.displacement is not None:
-        raise ValueError(f"{where}: cutout_opacity and displacement apply to surfaces, not "
-                         "to hair; leave material.geometry at its default")
 
 
 def _surface_is_closed(surface) -> bool:
@@ -212,13 +196,21 @@ class Integrator:
         #: hair strands (render.hair), shaded by their material's hair bsdf in the kernel
         self.hair = np.array([_is_strands(o.surface) for o in self.objects], dtype=bool)
         for k in np.flatnonzero(self.hair):
-            _check_hair(self.objects[k])
+            try:
+                check_hair_bsdf(self.objects[k].material.hair)
+            except ValueError as e:
+                raise ValueError(f"object {self.objects[k].name!r} (hair strands): {e}") from None
+        #: the materials of the objects' surfaces: MDL shades hair by the material's hair
+        #: field alone (surface, backface, ior, volume and geometry do not apply), so a
+        #: hair object's surface is the default material's (no emission, no cutout)
+        self.surface_materials = [M.material() if self.hair[k] else o.material
+                                  for k, o in enumerate(self.objects)]
         lights = list(scene.lights)
         #: each emissive object's triangles as one light (its emission and total area);
         #: next-event estimation samples them in groups (AreaLight.groups)
         self.emitters = {}
-        for k, obj in enumerate(self.objects):
-            if _is_emissive(obj.material):
+        for k, mat in enumerate(self.surface_materials):
+            if _is_emissive(mat):
                 first, last = geometry.face_offset[k], geometry.face_offset[k + 1]
                 faces = np.arange(first, last)
                 corners = geometry.vertices[geometry.faces[faces]]
@@ -235,13 +227,13 @@ class Integrator:
         for light in self.lights.lights:
             if type(light) not in KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
-        mats = [o.material for o in self.objects]
+        mats = self.surface_materials
         self.cutout = np.array([_has_cutout(m) for m in mats], dtype=bool)
         # thin-walled materials with their own backface are shaded per side
         self.two_faced = np.array(
             [bool(getattr(m, "thin_walled", False))
              and not getattr(getattr(m, "backface", None), "is_default", True) for m in mats],
-            dtype=bool) & ~self.hair
+            dtype=bool)
         self.max_depth = self.settings.max_depth if self.settings.max_depth > 0 else 1 << 30
         # interfaces and media: closed non-thin-walled objects enter the medium stack
         self.encloses = np.array([_may_enclose(m) and _surface_is_closed(o.surface)
@@ -271,7 +263,6 @@ class Integrator:
         self.bound = np.array([_varying(m) or (_is_emissive(m) and const_emit[k] is None
                                                and not self.emit_program[k])
                                for k, m in enumerate(mats)], dtype=bool)
-        self.bound &= ~self.hair
         self.emit_program &= ~self.bound
         # the program slots: bsdfs (2k front, 2k + 1 back), then edfs (EDF_SLOTS + 2k,
         # + 1), then the media's phase functions (after both)
@@ -291,7 +282,8 @@ class Integrator:
         #: objects whose programs read the IOR outside them (rebound per lane inside
         #: other objects)
         self.ior_sensitive = np.array(
-            [self.bound[k] or self._reads_outside_ior(k) for k in range(n_obj)], dtype=bool)
+            [self.bound[k] or self._reads_outside_ior(k) for k in range(n_obj)],
+            dtype=bool) & ~self.hair
         self.passable = self.cutout | self.null_candidate
         #: whether any lane may need per-hit bindings (:meth:`_bind`)
         self.may_bind = bool(self.bound.any() or (self.encloses.any() and self.ior_sensitive.any()))
@@ -386,8 +378,7 @@ class Integrator:
             flags[self.ior_sensitive] |= kern.IOR_SENSITIVE
         opacity = np.ones(n_obj)
         ior = np.ones(n_obj)
-        for k, obj in enumerate(self.objects):
-            mat = obj.material
+        for k, mat in enumerate(self.surface_materials):
             if not callable(mat.ior):
                 ior[k] = float(np.mean(mat.ior))
             op = getattr(mat.geometry, "cutout_opacity", 1.0)

@@ -669,6 +669,17 @@ def modelling_summary(scene: Scene, geometry_stats: list) -> list[dict]:
     for obj, st in zip(scene.objects, geometry_stats, strict=True):
         m = obj.material
         field_ = obj.original_displacement or obj.displacement
+        if "curve_segments" in st:  # hair (render.hair): the material's hair field only
+            out.append({
+                "name": obj.name,
+                "geometry": (f"hair: {st['strands']:,} strands, {st['curve_segments']:,} "
+                             f"{st['curve_kind']} curve segments (Embree round curves)"),
+                "triangles": 0, "diced": False, "displacement": "none",
+                "normal": "the fibre's (tangent and tube normal)",
+                "dfs": sorted(_df_names(m.hair)) or ["none (black)"],
+                "emits": False, "volume": False, "thin_walled": False, "cutout": False,
+            })
+            continue
         if st.get("diced"):
             err = st.get("max_error_px")
             geometry = (f"diced: {st['triangles']:,} triangles"
@@ -792,6 +803,54 @@ class _Locator:
         first, _ = self.section(name, index)
         return first, 1 if first else 0
 
+    def find_key(self, name: str, index: int | None, key: str,
+                 after: tuple[int, int] = (0, 0)) -> tuple[int, int]:
+        """(line, column) of ``key =`` anywhere in a table's lines (inside an inline
+        table too), at or after ``after``; (0, 0) if absent."""
+        pat = re.compile(r"(?:^|[\s{,])(" + re.escape(key) + r")\s*=")
+        for s in self.sections:
+            if not (s[0] == name or s[0].startswith(name + ".")) or (
+                index is not None and s[1] != index
+            ):
+                continue
+            for ln in range(max(s[2], after[0]), s[3] + 1):
+                text = self.lines[ln - 1].split("#", 1)[0]
+                start = after[1] if ln == after[0] else 0
+                m = pat.search(text, max(start - 1, 0))
+                if m:
+                    return ln, m.start(1) + 1
+        return 0, 0
+
+    def array_item(self, line: int, column: int, path) -> tuple[int, int]:
+        """(line, column) of the element at index ``path`` (a tuple: ``(i,)`` or
+        ``(i, j)`` for nested arrays) of the array assigned by the ``key =`` at
+        ``line``:``column``; the deepest element found if the path runs out."""
+        text = self.text
+        if not line:
+            return 0, 0
+        i = text.find("=", self.line_start[line - 1] + column - 1)
+        if i < 0:
+            return line, column
+        i = _skip_blank(text, i + 1)
+        found = i
+        for want in path:
+            if i >= len(text) or text[i] != "[":
+                break
+            i = _skip_blank(text, i + 1, newlines=True)
+            k = 0
+            while i < len(text) and text[i] != "]" and k < want:
+                i = _skip_blank(text, _skip_value(text, i), newlines=True)
+                if i < len(text) and text[i] == ",":
+                    i = _skip_blank(text, i + 1, newlines=True)
+                    k += 1
+                else:
+                    break
+            if k != want or i >= len(text) or text[i] == "]":
+                break
+            found = i
+        ln = text.count("\n", 0, found) + 1
+        return ln, found - self.line_start[ln - 1] + 1
+
     def value_position(self, line: int, offset: int) -> tuple[int, int]:
         """(line, column) of the character ``offset`` characters into the string value
         on ``line`` (after the opening quotes), when the string has no escapes."""
@@ -812,6 +871,52 @@ class _Locator:
         at = pos + min(offset, len(raw))
         ln = self.text.count("\n", 0, at) + 1
         return ln, at - self.line_start[ln - 1] + 1
+
+
+def _skip_blank(text: str, i: int, newlines: bool = False) -> int:
+    """The first position at or after ``i`` that is not blank (nor a comment, nor with
+    ``newlines`` a line break)."""
+    while i < len(text):
+        ch = text[i]
+        if ch == "#":
+            j = text.find("\n", i)
+            i = len(text) if j < 0 else j
+        elif ch in " \t\r" or (newlines and ch == "\n"):
+            i += 1
+        else:
+            break
+    return i
+
+
+def _skip_value(text: str, i: int) -> int:
+    """The position just after the TOML value (array, inline table, string or bare
+    value) that starts at ``i``."""
+    if i >= len(text):
+        return i
+    ch = text[i]
+    if ch in "\"'":
+        quote = text[i:i + 3] if text[i:i + 3] in ('"""', "'''") else ch
+        j = i + len(quote)
+        while j < len(text):
+            if ch == '"' and text[j] == "\\":
+                j += 2
+                continue
+            if text.startswith(quote, j):
+                return j + len(quote)
+            j += 1
+        return j
+    if ch in "[{":
+        close = "]" if ch == "[" else "}"
+        j = _skip_blank(text, i + 1, newlines=True)
+        while j < len(text) and text[j] != close:
+            j = _skip_blank(text, _skip_value(text, j), newlines=True)
+            if j < len(text) and text[j] in ",=":
+                j = _skip_blank(text, j + 1, newlines=True)
+        return j + 1
+    j = i
+    while j < len(text) and text[j] not in ",]}\n#=":
+        j += 1
+    return j
 
 
 def _in_multiline_string(text: str, pos: int) -> bool:
@@ -1190,8 +1295,22 @@ class _Parser:
                              "curves")
         try:
             return from_table(spec)
-        except (StrandsError, TypeError) as e:
-            raise self.error(f"objects[{i}]: curves: {e}", "objects", i, "curves") from None
+        except StrandsError as e:
+            raise self.strands_error(e, i) from None
+
+    def strands_error(self, e, i: int) -> SceneError:
+        """A :class:`render.hair.StrandsError` of ``objects[i]`` located in the file: at
+        the strand (and point) it names, else at its key in the curves table."""
+        where = self.loc.find_key("objects", i, "curves")
+        if not where[0]:
+            where = self.loc.section("objects.curves", i)[0], 1
+        line, col = self.loc.find_key("objects", i, e.key, where) if e.key else (0, 0)
+        if line and e.strand is not None and e.key in ("points", "radii"):
+            path = (e.strand,) if e.point is None else (e.strand, e.point)
+            line, col = self.loc.array_item(line, col, path)
+        if not line:
+            line, col = where
+        return SceneError(f"objects[{i}]: curves: {e}", self.path, line, col if line else 0)
 
     def surface(self, spec, i: int):
         from displacement import surfaces
@@ -1336,9 +1455,8 @@ class _Parser:
                 "{ type = ... } (hair strands)", "objects", i
             )
         if "curves" in t:
-            surface = self.curves(t["curves"], i)
-        else:
-            surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
+            return self.hair_object(t, i)
+        surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
         if "material" not in t:
             raise self.error(
                 f"objects[{i}]: missing material (an MDL call expression)", "objects", i
@@ -1378,6 +1496,35 @@ class _Parser:
             original_displacement=written if method != "displacement" else None,
             **dicing,
         )
+
+    def hair_object(self, t: dict, i: int) -> SceneObject:
+        """An object of hair strands (``curves = {...}``): its strands, checked in world
+        space, and a material whose ``hair`` field shades them (MDL: nothing else of the
+        material applies to hair)."""
+        from render.hair import StrandsError, check_hair_bsdf
+
+        for key in ("resolution", "dicing_rate", "dicing_tolerance", "displacement_method",
+                    "normal_map_size", "normal_map_bits"):
+            if key in t:
+                raise self.error(f"objects[{i}]: {key} applies to surfaces, not to hair "
+                                 "strands (curves); remove it", "objects", i, key)
+        surface = self.curves(t["curves"], i)
+        if "material" not in t:
+            raise self.error(
+                f"objects[{i}]: missing material, e.g. \"material(hair: "
+                "df::chiang_hair_bsdf(roughness_R: float2(0.2, 0.3)))\"", "objects", i)
+        material = self.material(t["material"], i)
+        try:
+            check_hair_bsdf(material.hair)
+        except ValueError as e:
+            raise self.error(f"objects[{i}]: material: {e}", "objects", i, "material") from None
+        transform = self.transform(t, "objects", i)
+        try:
+            surface.world(transform)
+        except StrandsError as e:
+            raise self.strands_error(e, i) from None
+        return SceneObject(surface, material, transform, str(t.get("name", f"object{i}")), None,
+                           t["material"])
 
     def light(self, t: dict, i: int):
         kinds = {"point", "spot", "directional", "environment", "sun_and_sky", "quad", "sphere"}
