@@ -300,7 +300,12 @@ class SceneObject:
 
     @property
     def displacement(self):
-        """The material's displacement field, or None."""
+        """The material's displacement field, or None (always for hair strands: MDL's
+        material geometry does not apply to hair)."""
+        from render.hair import Strands
+
+        if isinstance(self.surface, Strands):
+            return None
         geometry = getattr(self.material, "geometry", None)
         return getattr(geometry, "displacement", None)
 

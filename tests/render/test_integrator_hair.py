@@ -94,11 +94,13 @@ def test_white_furnace(name):
 
 
 def test_black_hair_is_black_whatever_the_surface():
-    # material.hair = None is hair_bsdf(), black; MDL: nothing of the surface applies to
-    # hair, so a surface bsdf and emission on the same material change nothing
+    # material.hair = None is hair_bsdf(), black; MDL: nothing but the hair field applies
+    # to hair, so a surface bsdf, emission, displacement and cutout change nothing
     lit = M.material(surface=M.material_surface(
         M.df.diffuse_reflection_bsdf(tint=0.8),
-        M.material_emission(M.df.diffuse_edf(), intensity=(5.0, 5.0, 5.0))))
+        M.material_emission(M.df.diffuse_edf(), intensity=(5.0, 5.0, 5.0))),
+        geometry=M.material_geometry(displacement=lambda st: 0.1 * st.normal,
+                                     cutout_opacity=0.3))
     strand = Strands.polylines([[[-1, 0, 0], [1, 0, 0]]], radius=0.15)
     cam = _camera((0, 0, 3), (0, 0, 0))
     for material in (BLACK, lit):
