@@ -63,7 +63,8 @@ from render.df._kernel_common import unitize
 from render.jit import njit
 
 __all__ = ["Strands", "StrandsError", "fringe", "from_table", "check_hair_bsdf", "curve_point",
-           "hair_hit", "CURVE_COLUMNS", "LINEAR", "BEZIER", "MIN_RADIUS_ULPS"]
+           "hair_hit", "CURVE_COLUMNS", "LINEAR", "BEZIER", "MIN_RADIUS_ULPS",
+           "MAX_SEGMENT_RADII", "MAX_PIECES"]
 
 LINEAR, BEZIER = "linear", "bezier"
 #: columns of a row of the curve table: four control points (x, y, z, radius)
@@ -74,6 +75,14 @@ MIN_RADIUS_ULPS = 16.0
 _F32_EPS = float(np.finfo(np.float32).eps)  # 2^-23
 #: a segment shorter than this many float32 steps of its coordinates is degenerate
 _MIN_LENGTH_ULPS = 4.0
+#: segments longer than this many of their (smallest) radii are split for Embree, whose
+#: round curves are exact to a few per cent of the radius only where radius / length
+#: >~ 1e-3 (measured, tests/render/test_embree.py: at 1e-5 a linear segment is traced up
+#: to 23 radii from its axis, and misses some rays through it); the pieces are the same
+#: curve (de Casteljau), so the geometry does not change
+MAX_SEGMENT_RADII = 250.0
+#: at most this many pieces per input segment (beyond: a clear error, not a huge scene)
+MAX_PIECES = 4096
 
 
 class StrandsError(ValueError):
@@ -179,25 +188,30 @@ class Strands:
         return cls(np.ascontiguousarray(np.vstack(pts)), np.concatenate(segs).astype(np.int64),
                    kind, np.concatenate(owner).astype(np.int64))
 
-    def world(self, transform: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def world(self, transform: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The strands in world space, as Embree and the kernel see them.
 
         Positions go by the object's transform, radii by its mean scale (the cube root of
-        the determinant); both are rounded to float32 (Embree's precision), so the kernel
+        the determinant).  Segments longer than :data:`MAX_SEGMENT_RADII` radii are split
+        into equal pieces of the same curve (Embree traces thin long round curves too
+        thick).  Everything is rounded to float32 (Embree's precision), so the kernel
         rebuilds each hit on the very tube Embree traced.
 
         Returns
         -------
         points : (n, 4) float64
             World control points and radii (float32 values).
+        segments : (m,) int64
+            The first point of each traced segment (:attr:`segments` after splitting).
         table : (m, 16) float64
-            The curve table: each segment's four Bézier control points and radii.
+            The curve table: each traced segment's four Bézier control points and radii.
 
         Raises
         ------
         StrandsError
             A radius below :data:`MIN_RADIUS_ULPS` float32 steps of the strand's
-            coordinates, or a segment that float32 collapses to a point.
+            coordinates, a segment that float32 collapses to a point, or one that would
+            need more than :data:`MAX_PIECES` pieces.
         """
         transform = np.asarray(transform, dtype=np.float64)
         lin, t = transform[:3, :3], transform[:3, 3]
@@ -229,8 +243,10 @@ class Strands:
                     "nearer the origin", "radius" if np.ptp(self.points[lo:hi, 3]) == 0 else
                     "radii", i, k)
             _check_segments(q[:, :3], i, step)
-        rows = np.empty((self.segment_count, CURVE_COLUMNS))
-        s = self.segments
+        p, s = _split(p, self.segments, self.kind, self.strand)
+        with np.errstate(over="ignore"):
+            p32 = p.astype(np.float32).astype(np.float64)
+        rows = np.empty((len(s), CURVE_COLUMNS))
         if self.kind == BEZIER:
             for c in range(4):
                 rows[:, 4 * c:4 * c + 4] = p32[s + c]
@@ -238,14 +254,58 @@ class Strands:
             a, b = p32[s], p32[s + 1]
             for c in range(4):
                 rows[:, 4 * c:4 * c + 4] = a + (b - a) * (c / 3.0)
-        return np.ascontiguousarray(p32), rows
+        return np.ascontiguousarray(p32), s, rows
 
     def bounds(self, transform: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World-space bounding box ``(lo, hi)`` of the strands, radii included (a Bézier
         curve lies in the hull of its control points)."""
-        p, _ = self.world(transform)
+        p, _, _ = self.world(transform)
         r = p[:, 3:4]
         return (p[:, :3] - r).min(axis=0), (p[:, :3] + r).max(axis=0)
+
+
+def _split(p: np.ndarray, segments: np.ndarray, kind: str, strand: np.ndarray):
+    """Control points ``p`` (n, 4) and ``segments`` with every segment longer than
+    :data:`MAX_SEGMENT_RADII` of its smallest radius cut into equal parameter pieces of
+    the same curve; unchanged when none is.  Pieces get their own control points."""
+    step = 1 if kind == LINEAR else 3
+    ctrl = p[segments[:, None] + np.arange(step + 1)]  # (m, step + 1, 4)
+    length = np.linalg.norm(np.diff(ctrl[:, :, :3], axis=1), axis=2).sum(axis=1)
+    pieces = np.ceil(length / (MAX_SEGMENT_RADII * ctrl[:, :, 3].min(axis=1)))
+    pieces = np.maximum(pieces, 1.0)
+    if pieces.max() > MAX_PIECES:
+        j = int(np.argmax(pieces))
+        raise StrandsError(
+            f"strand {int(strand[j]) + 1}: a segment {length[j]:.3g} long with radius "
+            f"{ctrl[j, :, 3].min():.3g} is {length[j] / ctrl[j, :, 3].min():.3g} radii long; "
+            f"Embree traces a round curve exactly only up to {MAX_SEGMENT_RADII:g} radii a "
+            f"segment, and splitting it would take more than {MAX_PIECES} pieces: give a "
+            "larger radius or more, shorter segments", "radius")
+    if pieces.max() == 1.0:
+        return p, segments
+    k = pieces.astype(np.int64)
+    seg = np.repeat(np.arange(len(segments)), k)
+    j = np.arange(len(seg)) - np.repeat(np.cumsum(k) - k, k)
+    u0, u1 = j / k[seg], (j + 1) / k[seg]
+    c = ctrl[seg]
+    if kind == LINEAR:
+        out = np.stack([c[:, 0] + (c[:, 1] - c[:, 0]) * u0[:, None],
+                        c[:, 0] + (c[:, 1] - c[:, 0]) * u1[:, None]], axis=1)
+    else:  # the cubic on [u0, u1]: ends B(u) and B(u) +- (u1 - u0) / 3 B'(u)
+        def at(u):
+            v = (1.0 - u)[:, None]
+            w = u[:, None]
+            b = (v ** 3 * c[:, 0] + 3 * w * v * v * c[:, 1] + 3 * w * w * v * c[:, 2]
+                 + w ** 3 * c[:, 3])
+            d = 3 * (v * v * (c[:, 1] - c[:, 0]) + 2 * w * v * (c[:, 2] - c[:, 1])
+                     + w * w * (c[:, 3] - c[:, 2]))
+            return b, d
+
+        (b0, d0), (b1, d1) = at(u0), at(u1)
+        h = ((u1 - u0) / 3.0)[:, None]
+        out = np.stack([b0, b0 + h * d0, b1 - h * d1, b1], axis=1)
+    return (np.ascontiguousarray(out.reshape(-1, 4)),
+            (step + 1) * np.arange(len(seg), dtype=np.int64))
 
 
 def _points(s, i: int) -> np.ndarray:

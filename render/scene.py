@@ -475,16 +475,17 @@ class Geometry:
         for k, obj in enumerate(scene.objects):
             if isinstance(obj.surface, Strands):
                 try:
-                    pts, rows = obj.surface.world(obj.transform)
+                    pts, segs, rows = obj.surface.world(obj.transform)
                 except StrandsError as e:
                     raise ValueError(f"object {obj.name!r} (hair strands): {e}") from None
-                strands[k] = (pts, rows)
+                strands[k] = (pts, segs, rows)
                 z3 = np.zeros((0, 3))
                 # a placeholder triangle per curve segment (never traced: Embree gets the
                 # curves): the kernels find every primitive's object by its global number
                 part = (z3, np.zeros((len(rows), 3), dtype=np.int64), np.zeros((0, 2)), z3, z3,
                         z3)
                 st = {"diced": False, "triangles": 0, "curve_segments": len(rows),
+                      "strand_segments": obj.surface.segment_count,
                       "strands": obj.surface.strand_count, "curve_kind": obj.surface.kind}
             else:
                 part, st = _object_triangles(obj, scene.camera, scene.settings)
@@ -526,7 +527,7 @@ class Geometry:
         face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
         boxes = [(p[0].min(axis=0), p[0].max(axis=0)) for i, p in enumerate(parts)
                  if len(p[0]) and i not in strands]
-        for pts, _ in strands.values():
+        for pts, _, _ in strands.values():
             r = pts[:, 3:4]
             boxes.append(((pts[:, :3] - r).min(axis=0), (pts[:, :3] + r).max(axis=0)))
         lo = np.min([b[0] for b in boxes], axis=0)
@@ -534,17 +535,16 @@ class Geometry:
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         coord_max = max(float(np.abs(b).max()) for box in boxes for b in box)
 
-        embree = EmbreeScene([Curves(strands[i][0], scene.objects[i].surface.segments,
-                                     scene.objects[i].surface.kind) if i in strands
-                              else (p[0], p[1]) for i, p in enumerate(parts)])
+        embree = EmbreeScene([Curves(strands[i][0], strands[i][1], scene.objects[i].surface.kind)
+                              if i in strands else (p[0], p[1]) for i, p in enumerate(parts)])
         # the curve table: one row per segment, each hair object's rows together
         curve_first = np.full(len(parts), -1, dtype=np.int64)
         rows = [np.zeros((1, 16))]
         count = 0
         for k in sorted(strands):
             curve_first[k] = count
-            rows.append(strands[k][1])
-            count += len(strands[k][1])
+            rows.append(strands[k][2])
+            count += len(strands[k][2])
         curves = np.ascontiguousarray(np.vstack(rows[1:] if strands else rows))
         return cls(embree, vertices, normals, tu, tv, uv, faces, face_object, face_normal,
                    f_off, extent, 0.5 * (lo + hi), stats, curves=curves,
@@ -677,8 +677,11 @@ def modelling_summary(scene: Scene, geometry_stats: list) -> list[dict]:
         if "curve_segments" in st:  # hair (render.hair): the material's hair field only
             out.append({
                 "name": obj.name,
-                "geometry": (f"hair: {st['strands']:,} strands, {st['curve_segments']:,} "
-                             f"{st['curve_kind']} curve segments (Embree round curves)"),
+                "geometry": (f"hair: {st['strands']:,} strands, {st['strand_segments']:,} "
+                             f"{st['curve_kind']} curve segments"
+                             + (f" (traced as {st['curve_segments']:,}: long thin ones split)"
+                                if st["curve_segments"] != st["strand_segments"] else "")
+                             + " (Embree round curves)"),
                 "triangles": 0, "diced": False, "displacement": "none",
                 "normal": "the fibre's (tangent and tube normal)",
                 "dfs": sorted(_df_names(m.hair)) or ["none (black)"],

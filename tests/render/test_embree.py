@@ -438,3 +438,22 @@ def test_bad_curves_give_clear_errors():
     ):
         with pytest.raises(ValueError, match=match):
             EmbreeScene([curves])
+
+
+@pytest.mark.parametrize(("kind", "fat"), [("linear", 10.0), ("bezier", 1.2)])
+def test_thin_long_round_curves_are_traced_too_thick(kind, fat, rng):
+    # measured: Embree's round curves are exact where radius / length >~ 1e-3; at 1e-5 it
+    # hits rays many radii off the axis (render.hair splits such segments, MAX_SEGMENT_RADII)
+    def reach(r, length):
+        a, b = np.array([-length / 2, 0.3, 0.0]), np.array([length / 2, 0.3, 0.0])
+        pts = ([[*a, r], [*b, r]] if kind == "linear" else
+               [[*(a + (b - a) * c / 3), r] for c in range(4)])
+        with EmbreeScene([embree.Curves(np.array(pts), np.array([0]), kind)]) as scene:
+            off = np.linspace(0.0, 30 * r, 601)
+            x = rng.uniform(-0.3 * length, 0.3 * length, len(off))
+            h = scene.intersect(np.column_stack([x, 0.3 + off, np.full(len(off), 2.0)]),
+                                np.tile([0.0, 0.0, -1.0], (len(off), 1)))
+            return off[h.geom_id >= 0].max() / r
+
+    assert reach(1e-5, 1.0) > fat  # r / L = 1e-5
+    assert reach(4e-3, 1.0) < 1.03  # r / L = 1 / MAX_SEGMENT_RADII

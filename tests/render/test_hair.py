@@ -9,6 +9,7 @@ import pytest
 
 from render.hair import (
     CURVE_COLUMNS,
+    MAX_SEGMENT_RADII,
     MIN_RADIUS_ULPS,
     Strands,
     StrandsError,
@@ -68,7 +69,8 @@ def test_world_table_is_float32_and_transformed():
     s = Strands.polylines([[[0.1, 0.2, 0.3], [1.1, 0.2, 0.3]]], radius=0.01)
     t = np.diag([2.0, 2.0, 2.0, 1.0])
     t[:3, 3] = (1.0, 0.0, -1.0)
-    p, table = s.world(t)
+    p, segs, table = s.world(t)
+    assert segs.tolist() == [0]
     assert table.shape == (1, CURVE_COLUMNS)
     assert np.allclose(p[:, :3], [[1.2, 0.4, -0.4], [3.2, 0.4, -0.4]], atol=1e-6)
     assert np.allclose(p[:, 3], 0.02)
@@ -80,6 +82,53 @@ def test_world_table_is_float32_and_transformed():
         assert np.allclose([dx, dy, dz], p[1, :3] - p[0, :3])
     lo, hi = s.bounds(t)
     assert np.allclose(lo, [1.18, 0.38, -0.42]) and np.allclose(hi, [3.22, 0.42, -0.38])
+
+
+@pytest.mark.parametrize("kind", ["linear", "bezier"])
+def test_long_thin_segments_are_split_into_the_same_curve(kind, rng):
+    pts = [[0, 0, 0], [1, 0.5, 0], [2, -0.5, 0.3], [3, 0, 0]]
+    radii = [1e-3, 2e-3, 1e-3, 5e-4]
+    s = (Strands.polylines([pts], radii=[radii]) if kind == "linear" else
+         Strands.bezier([pts], radii=[radii]))
+    p, segs, table = s.world(np.eye(4))
+    assert len(segs) == len(table) > s.segment_count
+    # each piece at most MAX_SEGMENT_RADII of its smallest radius long (control polygon)
+    step = 1 if kind == "linear" else 3
+    ctrl = p[segs[:, None] + np.arange(step + 1)]
+    length = np.linalg.norm(np.diff(ctrl[:, :, :3], axis=1), axis=2).sum(axis=1)
+    assert np.all(length <= MAX_SEGMENT_RADII * ctrl[:, :, 3].min(axis=1) * (1 + 1e-6))
+    # the pieces trace the input curve: points of the pieces lie on it (float32)
+    if kind == "bezier":
+        orig = s.points
+        for _ in range(50):
+            row, u = rng.integers(len(table)), rng.uniform()
+            x = np.array(curve_point(table, row, u)[:4])
+            # its parameter on the whole curve
+            k = len(table)
+            big = (row + u) / k
+            v = 1 - big
+            want = (v**3 * orig[0] + 3 * big * v * v * orig[1] + 3 * big * big * v * orig[2]
+                    + big**3 * orig[3])
+            assert np.allclose(x, want, atol=1e-6)
+    with pytest.raises(StrandsError, match=r"more than 4096 pieces: give a larger radius"):
+        # (just above float32's 16 steps at |x| = 1e4, and 1.04e6 radii long)
+        Strands.polylines([[[-1e4, 0, 0], [1e4, 0, 0]]], radius=0.0192).world(np.eye(4))
+
+
+def test_split_tubes_are_traced_exactly_by_embree(rng):
+    # r / L = 1e-5: unsplit, Embree hits rays 20 radii off the axis; split, within 1 %
+    from render.embree import Curves, EmbreeScene
+
+    r = 1e-5
+    s = Strands.polylines([[[-0.5, 0.3, 0.0], [0.5, 0.3, 0.0]]], radius=r)
+    p, segs, _ = s.world(np.eye(4))
+    scene = EmbreeScene([Curves(p, segs, "linear")])
+    off = np.linspace(0.0, 3 * r, 301)
+    x = rng.uniform(-0.45, 0.45, len(off))
+    h = scene.intersect(np.column_stack([x, 0.3 + off, np.full(len(off), 2.0)]),
+                        np.tile([0.0, 0.0, -1.0], (len(off), 1)))
+    hit = h.geom_id >= 0
+    assert hit[off < 0.99 * r].all() and not hit[off > 1.01 * r].any()
 
 
 def test_radius_below_float32_resolution_is_refused():
@@ -145,13 +194,17 @@ def test_hair_bsdf_arguments_must_be_constant():
 
 # ------------------------------------------------------------------------ the frame
 def _cylinder(radius, length=2.0, kind="linear"):
-    """A straight strand along x from -length/2 to length/2: its curve table."""
+    """A straight strand along x from -length/2 to length/2: its curve table, one row
+    (not split, whatever its radius: the kernel's frame of any row)."""
     a, b = np.array([-length / 2, 0, 0]), np.array([length / 2, 0, 0])
     if kind == "linear":
         s = Strands.polylines([[a, b]], radius=radius)
     else:
         s = Strands.bezier([[a, a + (b - a) / 3, a + 2 * (b - a) / 3, b]], radius=radius)
-    return s.world(np.eye(4))[1]
+    p32 = s.points.astype(np.float32).astype(np.float64)
+    if kind == "linear":
+        p32 = np.array([p32[0] + (p32[1] - p32[0]) * c / 3 for c in range(4)])
+    return p32.reshape(1, CURVE_COLUMNS)
 
 
 def _f32(v):
@@ -225,6 +278,6 @@ def test_ray_through_the_axis_and_degenerate_tangent():
     assert np.allclose(out[3:6], [0, 0, 1]) and np.allclose(out[:3], [0, 0, 0.1])
     # a Bézier segment whose end control points repeat: c'(0) = 0, the chord instead
     s = Strands.bezier([[[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 0, 0]]], radius=0.1)
-    table = s.world(np.eye(4))[1]
+    table = s.world(np.eye(4))[2]
     out = hair_hit(table, 0, 0.0, 0.0, 0.0, 3.0, 0.0, 0.0, -1.0, 2.9)
     assert np.allclose(out[6:9], [1, 0, 0]) and np.all(np.isfinite(out))

@@ -93,6 +93,18 @@ def test_white_furnace(name):
     assert np.allclose(img[alpha == 0.0], 1.0)
 
 
+def test_radius_1e5_covers_its_exact_area():
+    # the cross of two strands of radius 1e-5 seen through a 2e-4 window: each covers a
+    # 2e-5-wide band (their segments are split for Embree: unsplit, Embree traces such a
+    # tube up to 20 radii thick); alpha's mean is the covered fraction of the window
+    objects, cam, _ = FURNACES["radius 1e-5"]
+    alpha = _render(objects, cam, spp=16).alpha()
+    w, d = 2e-4, 2e-5
+    exact = (2 * w * d - d * d) / (w * w)
+    se = math.sqrt(exact * (1 - exact) / (alpha.size * 16))
+    assert abs(alpha.mean() - exact) < 4 * se + 2e-3, (alpha.mean(), exact)
+
+
 def test_black_hair_is_black_whatever_the_surface():
     # material.hair = None is hair_bsdf(), black; MDL: nothing but the hair field applies
     # to hair, so a surface bsdf, emission, displacement and cutout change nothing
