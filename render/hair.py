@@ -77,9 +77,9 @@ _F32_EPS = float(np.finfo(np.float32).eps)  # 2^-23
 _MIN_LENGTH_ULPS = 4.0
 #: segments longer than this many of their (smallest) radii are split for Embree, whose
 #: round curves are exact to a few per cent of the radius only where radius / length
-#: >~ 1e-3 (measured, tests/render/test_embree.py: at 1e-5 a linear segment is traced up
-#: to 23 radii from its axis, and misses some rays through it); the pieces are the same
-#: curve (de Casteljau), so the geometry does not change
+#: >~ 1e-3 (measured, benchmarks/hair.py: at 1e-5 a linear segment is traced up to 24
+#: radii from its axis and misses some rays through it, a Bézier one up to 1.5 radii);
+#: the pieces are the same curve (de Casteljau), so the geometry does not change
 MAX_SEGMENT_RADII = 250.0
 #: at most this many pieces per input segment (beyond: a clear error, not a huge scene)
 MAX_PIECES = 4096

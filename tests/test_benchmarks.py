@@ -22,6 +22,7 @@ BENCHMARKS = {
     "invisible_displacement.py": ["--quick"],
     "displaced_vs_mitsuba.py": ["--quick"],
     "light_selection.py": ["--quick"],
+    "hair.py": ["--quick"],
 }
 
 
