@@ -335,6 +335,7 @@ export struct material {
     uniform color ior = color(1.0);
     material_volume volume = material_volume();
     material_geometry geometry = material_geometry();
+    hair_bsdf hair = hair_bsdf();
 };
 """
 

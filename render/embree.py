@@ -16,7 +16,8 @@ Scene handle
     is alive and not closed: keep the object referenced for as long as any kernel runs.
 Geometry
     One Embree triangle geometry per mesh, ``geom_id`` = the mesh's index in the list,
-    ``prim_id`` = the row of its face array.
+    ``prim_id`` = the row of its face array; or one round-curve geometry per
+    :data:`Curves` item (``prim_id`` = its segment; hair strands, :mod:`render.hair`).
 Rays
     float32 at the boundary (arguments are rounded on the way in).  Origin ``o``,
     direction ``d`` (need not be unit: ``t`` is measured in units of ``|d|``), and the
@@ -33,7 +34,9 @@ Hits
     ``(t, u, v, prim_id, geom_id, ng_x, ng_y, ng_z)``: ``o + t d`` is the hit point,
     equal to ``(1-u-v) v0 + u v1 + v v2`` for the triangle's vertices ``v0 v1 v2``, and
     ``ng`` is the unnormalized geometric normal ``(v1 - v0) x (v2 - v0)`` (the side
-    from which the vertices turn counter-clockwise).  A miss returns
+    from which the vertices turn counter-clockwise).  On a round curve ``u`` is the
+    curve parameter within the segment and ``ng`` the tube's outward normal (also for a
+    ray that meets the tube from inside: then ``ng . d > 0``).  A miss returns
     ``geom_id = prim_id = MISS`` (-1), ``t = tfar`` as given and ``u = v = ng = 0``.
 Scratch
     Embree reads and writes an ``RTCRayHit`` record, 16-byte aligned.  Each thread owns
@@ -93,6 +96,7 @@ __all__ = [
     "FLT_LARGE",
     "SCRATCH_SIZE",
     "EmbreeScene",
+    "Curves",
     "RayHits",
     "library_path",
     "new_scratch",
@@ -128,8 +132,9 @@ _NG, _U, _V, _PRIM, _GEOM, _INST, _INST_PRIM = 12, 15, 16, 17, 18, 19, 20
 
 # enum values of rtcore_common.h / rtcore_geometry.h / rtcore_buffer.h / rtcore_scene.h
 _GEOMETRY_TYPE_TRIANGLE = 0
+_GEOMETRY_TYPE_ROUND_LINEAR_CURVE, _GEOMETRY_TYPE_ROUND_BEZIER_CURVE = 16, 24
 _BUFFER_TYPE_INDEX, _BUFFER_TYPE_VERTEX = 0, 1
-_FORMAT_UINT3, _FORMAT_FLOAT3 = 0x5003, 0x9003
+_FORMAT_UINT, _FORMAT_UINT3, _FORMAT_FLOAT3, _FORMAT_FLOAT4 = 0x5001, 0x5003, 0x9003, 0x9004
 _BUILD_QUALITY = {"low": 0, "medium": 1, "high": 2}
 _SCENE_FLAG_ROBUST = 4
 
@@ -276,15 +281,48 @@ def _as_mesh(k: int, mesh) -> tuple[np.ndarray, np.ndarray]:
     return padded, np.ascontiguousarray(faces, dtype=np.uint32)
 
 
+#: round curves for :class:`EmbreeScene`: ``points`` (n, 4) x, y, z, radius; ``segments``
+#: (m,) the first control point of each segment; ``kind`` "linear" (2 points a segment,
+#: ``ROUND_LINEAR_CURVE``: cones joined by spheres, one at every point) or "bezier" (4,
+#: ``ROUND_BEZIER_CURVE``: a swept sphere, open at the curve's ends).  A hit's ``u`` is
+#: the curve parameter within the segment, ``prim_id`` the segment, ``ng`` the tube's
+#: outward normal.  Measured (tests/render/test_embree.py): Embree reports the far wall
+#: of a tube to a ray that starts inside it, and misses a tube seen exactly along its
+#: axis (a ray parallel to a straight segment).
+Curves = namedtuple("Curves", "points segments kind")
+
+
+def _as_curves(k: int, c: Curves) -> tuple[np.ndarray, np.ndarray]:
+    """Check curve geometry ``k``; its float32 (n, 4) points and uint32 segment indices."""
+    if np.any(np.asarray(c.segments) < 0):
+        raise ValueError(f"curves {k}: segment indices must be >= 0")
+    p = np.ascontiguousarray(c.points, dtype=np.float32)
+    s = np.ascontiguousarray(c.segments, dtype=np.uint32)
+    if p.ndim != 2 or p.shape[1] != 4 or s.ndim != 1:
+        raise ValueError(f"curves {k}: points must be (n, 4) and segments (m,), got "
+                         f"{p.shape} and {s.shape}")
+    if c.kind not in ("linear", "bezier"):
+        raise ValueError(f"curves {k}: kind must be 'linear' or 'bezier', got {c.kind!r}")
+    span = 2 if c.kind == "linear" else 4
+    if len(s) and int(s.max()) + span > len(p):
+        raise ValueError(f"curves {k}: a segment starts at point {int(s.max())}, past the "
+                         f"{len(p)} points")
+    if not np.all(np.abs(p) < FLT_LARGE) or np.any(p[:, 3] < 0):
+        raise ValueError(f"curves {k}: points must be finite with radii >= 0")
+    return p, s
+
+
 class EmbreeScene:
-    """An Embree scene of triangle meshes, committed once, traced from compiled code.
+    """An Embree scene of triangle meshes and round curves, committed once, traced from
+    compiled code.
 
     Parameters
     ----------
-    meshes : sequence of (vertices, faces)
+    meshes : sequence of (vertices, faces) or Curves
         ``vertices`` a float (v, 3) array (stored as float32), ``faces`` an integer
-        (f, 3) array of indices into it (stored as uint32).  Mesh ``k`` becomes
-        geometry ``k``.  Embree reads the stored copies in place; the scene keeps them.
+        (f, 3) array of indices into it (stored as uint32); or :data:`Curves`.  Item
+        ``k`` becomes geometry ``k``.  Embree reads the stored copies in place; the scene
+        keeps them.
     quality : {"low", "medium", "high"}
         BVH build quality (``RTC_BUILD_QUALITY_*``); see ``benchmarks/embree_calls.py``.
     robust : bool
@@ -301,7 +339,9 @@ class EmbreeScene:
             raise ValueError(f"quality must be one of {sorted(_BUILD_QUALITY)}, "
                              f"got {quality!r}")
         self._scene = None
-        self.buffers = [_as_mesh(k, m) for k, m in enumerate(meshes)]
+        curves = [isinstance(m, Curves) for m in meshes]
+        self.buffers = [_as_curves(k, m) if c else _as_mesh(k, m)
+                        for k, (m, c) in enumerate(zip(meshes, curves, strict=True))]
         dev = _get_device()
         scene = _lib.rtcNewScene(dev)
         _check(dev, "rtcNewScene")
@@ -309,12 +349,22 @@ class EmbreeScene:
         _lib.rtcSetSceneFlags(scene, _SCENE_FLAG_ROBUST if robust else 0)
         _lib.rtcSetSceneBuildQuality(scene, _BUILD_QUALITY[quality])
         for k, (v, f) in enumerate(self.buffers):
-            geom = _lib.rtcNewGeometry(dev, _GEOMETRY_TYPE_TRIANGLE)
-            _lib.rtcSetGeometryBuildQuality(geom, _BUILD_QUALITY[quality])
-            _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_VERTEX, 0, _FORMAT_FLOAT3,
-                                            v.ctypes.data, 0, 12, len(v) - 1)
-            _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_INDEX, 0, _FORMAT_UINT3,
-                                            f.ctypes.data, 0, 12, len(f))
+            if curves[k]:
+                kind = (_GEOMETRY_TYPE_ROUND_LINEAR_CURVE if meshes[k].kind == "linear"
+                        else _GEOMETRY_TYPE_ROUND_BEZIER_CURVE)
+                geom = _lib.rtcNewGeometry(dev, kind)
+                _lib.rtcSetGeometryBuildQuality(geom, _BUILD_QUALITY[quality])
+                _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_VERTEX, 0, _FORMAT_FLOAT4,
+                                                v.ctypes.data, 0, 16, len(v))
+                _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_INDEX, 0, _FORMAT_UINT,
+                                                f.ctypes.data, 0, 4, len(f))
+            else:
+                geom = _lib.rtcNewGeometry(dev, _GEOMETRY_TYPE_TRIANGLE)
+                _lib.rtcSetGeometryBuildQuality(geom, _BUILD_QUALITY[quality])
+                _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_VERTEX, 0, _FORMAT_FLOAT3,
+                                                v.ctypes.data, 0, 12, len(v) - 1)
+                _lib.rtcSetSharedGeometryBuffer(geom, _BUFFER_TYPE_INDEX, 0, _FORMAT_UINT3,
+                                                f.ctypes.data, 0, 12, len(f))
             _lib.rtcCommitGeometry(geom)
             _lib.rtcAttachGeometryByID(scene, geom, k)
             _lib.rtcReleaseGeometry(geom)

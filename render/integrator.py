@@ -73,9 +73,11 @@ from types import SimpleNamespace
 import numpy as np
 
 from render import embree
+from render import material as M
 from render import path as kern
 from render.film import Film
 from render.frame import Frame, mirror_z
+from render.hair import check_hair_bsdf
 from render.light_sampling import KINDS, MAX_EVERY_DELTA, light_table
 from render.lights import AreaLight, LightSet
 from render.numerics import dot
@@ -108,11 +110,20 @@ def _straight_through_candidate(material, two_faced: bool) -> bool:
     return True
 
 
+def _is_strands(surface) -> bool:
+    from render.hair import Strands
+
+    return isinstance(surface, Strands)
+
+
 def _surface_is_closed(surface) -> bool:
     """Whether an object's base surface encloses a volume (tested on a coarse base mesh:
     displacement and adaptive dicing keep a closed surface closed, but their T-junctions
     would fail a topological test of the diced triangles)."""
     from displacement.dice import is_mesh_surface
+
+    if _is_strands(surface):
+        return False
 
     if is_mesh_surface(surface):
         mesh = surface.base_mesh()
@@ -181,13 +192,25 @@ class Integrator:
         self.aovs = tuple(aovs)
         n_obj = len(self.objects)
         # scene-relative, plus the float32 rounding of the largest coordinate
-        self.eps = RAY_EPS * geometry.extent + 4e-7 * float(np.abs(geometry.vertices).max())
+        self.eps = RAY_EPS * geometry.extent + 4e-7 * geometry.coord_max
+        #: hair strands (render.hair), shaded by their material's hair bsdf in the kernel
+        self.hair = np.array([_is_strands(o.surface) for o in self.objects], dtype=bool)
+        for k in np.flatnonzero(self.hair):
+            try:
+                check_hair_bsdf(self.objects[k].material.hair)
+            except ValueError as e:
+                raise ValueError(f"object {self.objects[k].name!r} (hair strands): {e}") from None
+        #: the materials of the objects' surfaces: MDL shades hair by the material's hair
+        #: field alone (surface, backface, ior, volume and geometry do not apply), so a
+        #: hair object's surface is the default material's (no emission, no cutout)
+        self.surface_materials = [M.material() if self.hair[k] else o.material
+                                  for k, o in enumerate(self.objects)]
         lights = list(scene.lights)
         #: each emissive object's triangles as one light (its emission and total area);
         #: next-event estimation samples them in groups (AreaLight.groups)
         self.emitters = {}
-        for k, obj in enumerate(self.objects):
-            if _is_emissive(obj.material):
+        for k, mat in enumerate(self.surface_materials):
+            if _is_emissive(mat):
                 first, last = geometry.face_offset[k], geometry.face_offset[k + 1]
                 faces = np.arange(first, last)
                 corners = geometry.vertices[geometry.faces[faces]]
@@ -204,7 +227,7 @@ class Integrator:
         for light in self.lights.lights:
             if type(light) not in KINDS:
                 raise ValueError(f"{type(light).__name__} is not a light the renderer samples")
-        mats = [o.material for o in self.objects]
+        mats = self.surface_materials
         self.cutout = np.array([_has_cutout(m) for m in mats], dtype=bool)
         # thin-walled materials with their own backface are shaded per side
         self.two_faced = np.array(
@@ -245,7 +268,9 @@ class Integrator:
         # + 1), then the media's phase functions (after both)
         self.programs = [None] * (4 * n_obj)
         for k in range(n_obj):
-            if not self.bound[k]:
+            if self.hair[k]:
+                self.programs[2 * k] = self._hair_program(k)
+            elif not self.bound[k]:
                 self.programs[2 * k] = self._constant_program(k, back=False)
                 if self.two_faced[k]:  # slot 2k + 1 is read for two-faced objects only
                     self.programs[2 * k + 1] = self._constant_program(k, back=True)
@@ -257,7 +282,8 @@ class Integrator:
         #: objects whose programs read the IOR outside them (rebound per lane inside
         #: other objects)
         self.ior_sensitive = np.array(
-            [self.bound[k] or self._reads_outside_ior(k) for k in range(n_obj)], dtype=bool)
+            [self.bound[k] or self._reads_outside_ior(k) for k in range(n_obj)],
+            dtype=bool) & ~self.hair
         self.passable = self.cutout | self.null_candidate
         #: whether any lane may need per-hit bindings (:meth:`_bind`)
         self.may_bind = bool(self.bound.any() or (self.encloses.any() and self.ior_sensitive.any()))
@@ -285,6 +311,18 @@ class Integrator:
                              np.array([[0.0, 1.0, 0.0]]), self.objects[k].transform)
         return node.bind(state, ior_outside=1.0, ior_inside=float(np.mean(mat.ior)),
                          thin_walled=bool(mat.thin_walled)).program
+
+    def _hair_program(self, k: int):
+        """Object ``k``'s hair bsdf program (its material's ``hair``; None: black)."""
+        from displacement.state import ShadingState
+
+        node = self.objects[k].material.hair
+        if node is None:
+            return None
+        one = np.array([[0.0, 0.0, 1.0]])
+        state = ShadingState(np.zeros((1, 3)), one, np.zeros((1, 2)), np.array([[1.0, 0.0, 0.0]]),
+                             np.array([[0.0, 1.0, 0.0]]), self.objects[k].transform)
+        return node.bind(state).program
 
     def _edf_program(self, k: int, back: bool):
         """Object ``k``'s edf program (front surface, or a thin-walled backface), one
@@ -336,12 +374,12 @@ class Integrator:
         flags[self.encloses] |= kern.ENCLOSES
         flags[self.two_faced] |= kern.TWO_FACED
         flags[self.bound] |= kern.BOUND
+        flags[self.hair] |= kern.HAIR
         if self.encloses.any():
             flags[self.ior_sensitive] |= kern.IOR_SENSITIVE
         opacity = np.ones(n_obj)
         ior = np.ones(n_obj)
-        for k, obj in enumerate(self.objects):
-            mat = obj.material
+        for k, mat in enumerate(self.surface_materials):
             if not callable(mat.ior):
                 ior[k] = float(np.mean(mat.ior))
             op = getattr(mat.geometry, "cutout_opacity", 1.0)
@@ -394,7 +432,8 @@ class Integrator:
         scalars[kern.SC_MEDIA] = float(bool(self.media))
         scalars[kern.SC_AOV] = float(bool(self.aovs))
         scalars[kern.SC_BIND] = float(self.may_bind)
-        scalars[kern.SC_PASS] = float(bool(self.passable.any()))
+        # hair: shadow rays pass a tube they meet from inside (render.hair)
+        scalars[kern.SC_PASS] = float(bool(self.passable.any() or self.hair.any()))
         scalars[kern.SC_CAM:kern.SC_CAM + 3] = self.camera.position
         scalars[kern.SC_FWD:kern.SC_FWD + 3] = self.camera.forward
         scalars[kern.SC_WIDTH] = float(self.camera.width)
@@ -410,7 +449,8 @@ class Integrator:
             table.code, table.kids, table.frames, table.tables, table.roots, table.frame_lo,
             table.frame_hi,
             flags, opacity, ior, obj_medium, emit_hit,
-            np.ascontiguousarray([o.linear.ravel() for o in self.objects]), lt.face_light,
+            np.ascontiguousarray([o.linear.ravel() for o in self.objects]), geo.curves,
+            geo.curve_first, lt.face_light,
             media,
             lt.lights, lt.light_tri, lt.env_image, lt.env_dist, lt.sky, lt.sky_dist,
             self.camera.ray_map, scalars)
@@ -419,8 +459,7 @@ class Integrator:
     def _scene_disk(self) -> float:
         """pi r^2 of the scene's bounding sphere (the cross-section a distant light
         covers, for its power)."""
-        lo, hi = self.geo.vertices.min(axis=0), self.geo.vertices.max(axis=0)
-        return np.pi * (0.5 * float(np.linalg.norm(hi - lo))) ** 2
+        return np.pi * (0.5 * self.geo.extent) ** 2
 
     # ----------------------------------------------------------------- shading
     def _attributes(self, face: np.ndarray, b1: np.ndarray, b2: np.ndarray):

@@ -1040,6 +1040,9 @@ class material:  # noqa: N801
         Constant or ``f(state) -> (n, 3)``; averaged over channels for the dfs.
     volume : material_volume
     geometry : material_geometry
+    hair : DfNode (a hair_bsdf) or None
+        MDL 1.5's ``hair`` field: how hair geometry (strands, :mod:`render.hair`) of this
+        material scatters; None is ``hair_bsdf()`` (black).  Surfaces ignore it.
 
     Examples
     --------
@@ -1058,8 +1061,13 @@ class material:  # noqa: N801
     ior: Any = (1.0, 1.0, 1.0)
     volume: material_volume = field(default_factory=material_volume)
     geometry: material_geometry = field(default_factory=material_geometry)
+    hair: DfNode | None = None
 
     def __post_init__(self) -> None:
+        if self.hair is not None and not (isinstance(self.hair, DfNode)
+                                          and self.hair.kind == "hair_bsdf"):
+            raise ValueError(f"material.hair must be a hair_bsdf node (e.g. "
+                             f"df::chiang_hair_bsdf(...)) or None, got {self.hair!r}")
         if not isinstance(self.thin_walled, bool | np.bool_):
             raise ValueError(f"material.thin_walled must be a bool, got {self.thin_walled!r}")
         object.__setattr__(self, "thin_walled", bool(self.thin_walled))

@@ -15,6 +15,14 @@ vertex with next-event estimation through the phase function and a phase-sampled
 continuation.  Bsdfs are material programs run by :mod:`render.interpreter`; every
 sample value is drawn where it is needed (:func:`render.sampler.sample_pair`).
 
+A hit on a hair strand (:mod:`render.hair`, object flag ``HAIR``) is a vertex like a
+surface's, in the fibre's frame (:func:`render.hair.hair_hit`: the tangent along the
+strand, the tube's normal where the ray enters it) and shaded by the material's hair
+bsdf, with next-event estimation and MIS as at a surface; lights are weighed for it as
+for a point in a medium (the bsdf scatters all around).  A ray that meets a tube from
+inside (leaving a fibre it scattered into) passes through the wall without a vertex,
+path and shadow rays alike.
+
 Where an object's material varies over the surface (textures, noise, bump, a varying
 cutout or emission), a lane that hits it is *parked*: its state and hit are written to
 the parked arrays (``lf`` floats, ``li`` integers, the column constants below; its
@@ -40,6 +48,7 @@ from render.camera import camera_ray
 from render.df._kernel_common import unitize
 from render.df.measured_edf import O2L as MEASURED_O2L
 from render.df.spot_edf import SIGNATURE as _SPOT
+from render.hair import hair_hit
 from render.jit import njit
 from render.light_sampling import (
     EVERY_DELTA,
@@ -125,6 +134,9 @@ NA = 10
 #: whose edfs read the rotation from object space (a global spot or measured edf)
 CUTOUT, NULL, ENCLOSES, TWO_FACED, EMIT_CONST, BOUND, IOR_SENSITIVE = 1, 2, 4, 8, 16, 32, 64
 EMIT_PROG, EMIT_GLOBAL = 128, 256
+#: hair strands (:mod:`render.hair`): the object's primitives are curve segments (rows of
+#: ``curves``), its program (slot 2k) its material's hair bsdf
+HAIR = 512
 #: the edfs whose lobe may be fixed in object space (``object_to_local_ij`` context slots)
 OBJECT_EDFS = np.array([O_SPOT_EDF, O_MEASURED_EDF])
 #: one Embree call in this many is timed (the share of time inside Embree)
@@ -157,6 +169,8 @@ Tables = namedtuple(
         # EMIT_PROG: the intensity of the front and back edfs (per area in power mode)
         "emit_hit",
         "obj_linear",  # (k, 9) each object's linear map to world, row-major
+        "curves",  # (s, 16) hair segments' Bézier control points and radii (render.hair)
+        "curve_first",  # (k,) int64 each hair object's first row of curves, -1: none
         "face_light",  # (f,) int64 the area light (group) of each emissive triangle, -1: none
         "medium",  # (m, 12) sigma_a, sigma_s, sigma_t, emission per channel
         # the lights (render.light_sampling.light_table): a row per light and per node of
@@ -430,6 +444,8 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 if h[4] != embree.MISS:
                     f = face_offset[h[4]] + h[3]
                     hb1, hb2, t_hit = np.float64(h[1]), np.float64(h[2]), np.float64(h[0])
+                    if obj_flags[face_object[f]] & HAIR:  # hb2: the tube met from inside
+                        hb2 = 1.0 if h[5] * dx + h[6] * dy + h[7] * dz > 0.0 else 0.0
                     if may_bind and _needs_binding(obj_flags[face_object[f]], cso, csior, nstk,
                                                    face_object[f]):
                         _park(plf, pli, pso, psior, n_park, cso, csior, lane, ox, oy, oz, dx,
@@ -453,6 +469,7 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 t_hit = np.inf
             # ---- the medium of the segment: attenuate, or scatter inside it
             scattered = False
+            hair = False
             t_event = 0.0
             med = -1
             u_flight, u_roulette = 0.0, 0.0
@@ -506,9 +523,26 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 # ---- a surface
                 k = face_object[f]
                 flags = obj_flags[k]
-                px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
-                    packed, faces, face_normal, f, hb1, hb2)
-                gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
+                if flags & HAIR:
+                    if hb2 != 0.0:  # a tube met from inside: on through its wall, no vertex
+                        if crossings >= MAX_CROSSINGS:
+                            break
+                        ox, oy, oz = (ox + (t_hit + eps) * dx, oy + (t_hit + eps) * dy,
+                                      oz + (t_hit + eps) * dz)
+                        seg += t_hit + eps
+                        shift = eps
+                        crossings += 1
+                        continue
+                    # the fibre's frame: tangent along it, the tube's normal at the entry
+                    hair = True
+                    px, py, pz, nx, ny, nz, tx, ty, tz = hair_hit(
+                        tb.curves, tb.curve_first[k] + f - face_offset[k], hb1, ox, oy, oz,
+                        dx, dy, dz, t_hit)
+                    gx, gy, gz, uu, uv = nx, ny, nz, hb1, 0.0
+                else:
+                    px, py, pz, nx, ny, nz, tx, ty, tz, _, _, _, uu, uv = _attributes(
+                        packed, faces, face_normal, f, hb1, hb2)
+                    gx, gy, gz = face_normal[f, 0], face_normal[f, 1], face_normal[f, 2]
                 g_wo = -_dot(dx, dy, dz, gx, gy, gz)
                 front = g_wo > 0.0
                 slot = 2 * k + (1 if (flags & TWO_FACED) and not front else 0)
@@ -586,10 +620,12 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
             ul1 = ul2 = 0.0
             if can_continue:
                 ul1, ul2 = sample_pair(v1, ph, idx, pair0 + P_LIGHT, kind)
+            # the normal lights are weighed by (0: all around, in a medium or on a fibre)
+            snx, sny, snz = (0.0, 0.0, 0.0) if hair else (nx, ny, nz)
             for pick in range(1 + n_every if can_continue else 0):
                 if pick == 0:
-                    j, sel, total = select_light(lights, n_lights, mode, px, py, pz, nx, ny, nz,
-                                                 u_choice, lw)  # -1: none
+                    j, sel, total = select_light(lights, n_lights, mode, px, py, pz, snx, sny,
+                                                 snz, u_choice, lw)  # -1: none
                 else:
                     jd = next_delta(lights, n_lights, jd)
                     j, sel = jd, 1.0
@@ -694,7 +730,7 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 crossings += 1
             else:
                 prev_pdf, seg = pdf, 0.0
-                vx, vy, vz, vnx, vny, vnz, prev_sum = px, py, pz, nx, ny, nz, total
+                vx, vy, vz, vnx, vny, vnz, prev_sum = px, py, pz, snx, sny, snz, total
                 depth, crossings = depth + 1, 0
                 prev_delta = (not scattered) and (lobe & SPECULAR) != 0
     counts[0] += rays
@@ -837,7 +873,8 @@ def _parallel_shift(eps, gx, gy, gz, dx, dy, dz):
 def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, es, v1, ph,
                  idx, kind, counts):
     """Carry shadow record ``r`` to its light: attenuated by the medium of each segment,
-    through cutouts and null surfaces (:func:`_cross_shadow`); what arrives is added to
+    through cutouts and null surfaces (:func:`_cross_shadow`) and hair tubes it meets
+    from inside (from a fibre's vertex into the fibre); what arrives is added to
     ``L``, what is blocked dropped.  A pending hit (``S_HIT >= 0``) is taken first, with
     binding row ``v`` (-1: none).  Returns True where the record stops at a surface that
     numpy must shade first: it is then left in row ``r`` with that hit pending, else
@@ -848,6 +885,7 @@ def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, 
         f = si[r, S_HIT]
         far = sf[r, S_FAR]
         nstk = si[r, S_NSTK]
+        inside = False  # a hair tube met from inside: passed, as in trace
         if f >= 0:  # the pending hit
             si[r, S_HIT] = -1
             hb1, hb2, t = sf[r, S_HIT_B1], sf[r, S_HIT_B2], sf[r, S_HIT_T]
@@ -860,6 +898,7 @@ def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, 
                                       sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2], 0.0, far, es)
                 f = -1 if h[4] == embree.MISS else tb.face_offset[h[4]] + h[3]
                 hb1, hb2, t = h[1], h[2], h[0]
+                inside = h[5] * sf[r, S_D] + h[6] * sf[r, S_D + 1] + h[7] * sf[r, S_D + 2] > 0.0
             else:
                 blocked = embree.occluded1(scene, sf[r, S_O], sf[r, S_O + 1], sf[r, S_O + 2],
                                            sf[r, S_D], sf[r, S_D + 1], sf[r, S_D + 2], 0.0, far,
@@ -874,13 +913,18 @@ def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, 
             if f >= 0:
                 k = face_object[f]
                 flags = obj_flags[k]
-                if not (flags & (CUTOUT | NULL)) or si[r, S_CROSS] >= MAX_CROSSINGS:
+                if flags & HAIR:  # blocks, unless met from inside
+                    if not inside or si[r, S_CROSS] >= MAX_CROSSINGS:
+                        return False
+                elif not (flags & (CUTOUT | NULL)) or si[r, S_CROSS] >= MAX_CROSSINGS:
                     return False
-                if sc[SC_BIND] != 0.0 and _needs_binding(flags, sso[r:r + 1], ssior[r:r + 1],
-                                                         nstk, k):
-                    si[r, S_HIT] = f
-                    sf[r, S_HIT_T], sf[r, S_HIT_B1], sf[r, S_HIT_B2] = t, hb1, hb2
-                    return True
+                else:
+                    inside = False
+                    if sc[SC_BIND] != 0.0 and _needs_binding(flags, sso[r:r + 1],
+                                                             ssior[r:r + 1], nstk, k):
+                        si[r, S_HIT] = f
+                        sf[r, S_HIT_T], sf[r, S_HIT_B1], sf[r, S_HIT_B2] = t, hb1, hb2
+                        return True
         if f < 0:
             t = far
         if sc[SC_MEDIA] != 0.0 and nstk > 0:
@@ -894,6 +938,14 @@ def _walk_shadow(scene, tb, sf, si, sso, ssior, r, v, params, bf, bslot, L, ws, 
             for c in range(3):
                 L[lane, c] += sf[r, S_C + c]
             return False
+        if inside:  # on through the tube's wall, along the ray
+            step = t + sc[SC_EPS]
+            for c in range(3):
+                sf[r, S_O + c] += step * sf[r, S_D + c]
+            sf[r, S_FAR] = max(far - step, 0.0)
+            sf[r, S_LEAD] = sc[SC_EPS]
+            si[r, S_CROSS] += 1
+            continue
         if not _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslot,
                              ws, v1, ph, idx, kind):
             return False

@@ -313,7 +313,12 @@ class SceneObject:
 
     @property
     def displacement(self):
-        """The material's displacement field, or None."""
+        """The material's displacement field, or None (always for hair strands: MDL's
+        material geometry does not apply to hair)."""
+        from render.hair import Strands
+
+        if isinstance(self.surface, Strands):
+            return None
         geometry = getattr(self.material, "geometry", None)
         return getattr(geometry, "displacement", None)
 
@@ -438,7 +443,16 @@ class Geometry:
         Diagonal of the scene's bounding box (ray offsets scale with it).
     center : (3,) float64
     stats : list of dict
-        Per object: triangle count, whether it was diced, and the dicer's statistics.
+        Per object: triangle count, whether it was diced, and the dicer's statistics
+        (hair: ``curve_segments``, ``strands``, ``curve_kind``).
+    curves : (s, 16) float64
+        The hair segments' curve table (:mod:`render.hair`); a hair object's segments
+        also have placeholder rows in ``faces`` (never traced), so that every
+        primitive is ``face_offset[geomID] + primID``.
+    curve_first : (k,) int64
+        Each hair object's first row of ``curves`` (-1: a triangle mesh).
+    coord_max : float
+        The largest absolute world coordinate (ray offsets cover its float32 rounding).
     """
 
     embree: Any
@@ -455,12 +469,39 @@ class Geometry:
     center: np.ndarray
     stats: list
 
+    #: (s, 16) the hair segments' Bézier control points and radii in world space
+    #: (:func:`render.hair.Strands.world`; one row of zeros when there are none)
+    curves: np.ndarray = field(default_factory=lambda: np.zeros((1, 16)))
+    #: (k,) int64 each hair object's first row of ``curves`` (-1: a triangle mesh)
+    curve_first: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: the largest absolute world coordinate of any vertex or control point
+    coord_max: float = 0.0
+
     @classmethod
     def build(cls, scene: Scene, progress: bool = False) -> Geometry:
+        from render.embree import Curves, EmbreeScene
+        from render.hair import Strands, StrandsError
+
         parts = []
         stats = []
-        for obj in scene.objects:
-            part, st = _object_triangles(obj, scene.camera, scene.settings)
+        strands = {}  # object -> (world control points, curve table rows)
+        for k, obj in enumerate(scene.objects):
+            if isinstance(obj.surface, Strands):
+                try:
+                    pts, segs, rows = obj.surface.world(obj.transform)
+                except StrandsError as e:
+                    raise ValueError(f"object {obj.name!r} (hair strands): {e}") from None
+                strands[k] = (pts, segs, rows)
+                z3 = np.zeros((0, 3))
+                # a placeholder triangle per curve segment (never traced: Embree gets the
+                # curves): the kernels find every primitive's object by its global number
+                part = (z3, np.zeros((len(rows), 3), dtype=np.int64), np.zeros((0, 2)), z3, z3,
+                        z3)
+                st = {"diced": False, "triangles": 0, "curve_segments": len(rows),
+                      "strand_segments": obj.surface.segment_count,
+                      "strands": obj.surface.strand_count, "curve_kind": obj.surface.kind}
+            else:
+                part, st = _object_triangles(obj, scene.camera, scene.settings)
             st["name"] = obj.name
             parts.append(part)
             stats.append(st)
@@ -471,10 +512,17 @@ class Geometry:
             raise ValueError(f"nothing to trace: every object ({names}) has zero area (a "
                              "displacement that collapses a surface to a line or a point "
                              "leaves no triangles)")
+        if not any(len(p[0]) for i, p in enumerate(parts) if i not in strands):
+            # hair only: one vertex for the placeholders to index
+            i = min(strands)
+            parts[i] = (np.zeros((1, 3)), parts[i][1], np.zeros((1, 2)),
+                        np.array([[0.0, 0.0, 1.0]]), np.array([[1.0, 0.0, 0.0]]),
+                        np.array([[0.0, 1.0, 0.0]]))
         v_off = np.cumsum([0] + [len(p[0]) for p in parts])
         f_off = np.cumsum([0] + [len(p[1]) for p in parts]).astype(np.int64)
         vertices = np.concatenate([p[0] for p in parts])
-        faces = np.concatenate([p[1] + v_off[i] for i, p in enumerate(parts)]).astype(np.int64)
+        faces = np.concatenate([p[1] + (0 if i in strands else v_off[i])
+                                for i, p in enumerate(parts)]).astype(np.int64)
         uv = np.concatenate([p[2] for p in parts])
         normals = np.concatenate([p[3] for p in parts])
         tu = np.concatenate([p[4] for p in parts])
@@ -490,30 +538,40 @@ class Geometry:
         ng_u, ok = unitize(ng)
         ns_u, ok2 = unitize(nsum)
         face_normal = np.where(ok[:, None], ng_u, np.where(ok2[:, None], ns_u, [0.0, 0.0, 1.0]))
-        lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+        boxes = [(p[0].min(axis=0), p[0].max(axis=0)) for i, p in enumerate(parts)
+                 if len(p[0]) and i not in strands]
+        for pts, _, _ in strands.values():
+            r = pts[:, 3:4]
+            boxes.append(((pts[:, :3] - r).min(axis=0), (pts[:, :3] + r).max(axis=0)))
+        lo = np.min([b[0] for b in boxes], axis=0)
+        hi = np.max([b[1] for b in boxes], axis=0)
         extent = float(np.linalg.norm(hi - lo)) or 1.0
-        from render.embree import EmbreeScene
+        coord_max = max(float(np.abs(b).max()) for box in boxes for b in box)
 
-        embree = EmbreeScene([(p[0], p[1]) for p in parts])
-        return cls(
-            embree,
-            vertices,
-            normals,
-            tu,
-            tv,
-            uv,
-            faces,
-            face_object,
-            face_normal,
-            f_off,
-            extent,
-            0.5 * (lo + hi),
-            stats,
-        )
+        embree = EmbreeScene([Curves(strands[i][0], strands[i][1], scene.objects[i].surface.kind)
+                              if i in strands else (p[0], p[1]) for i, p in enumerate(parts)])
+        # the curve table: one row per segment, each hair object's rows together
+        curve_first = np.full(len(parts), -1, dtype=np.int64)
+        rows = [np.zeros((1, 16))]
+        count = 0
+        for k in sorted(strands):
+            curve_first[k] = count
+            rows.append(strands[k][2])
+            count += len(strands[k][2])
+        curves = np.ascontiguousarray(np.vstack(rows[1:] if strands else rows))
+        return cls(embree, vertices, normals, tu, tv, uv, faces, face_object, face_normal,
+                   f_off, extent, 0.5 * (lo + hi), stats, curves=curves,
+                   curve_first=curve_first, coord_max=coord_max)
 
     @property
     def triangle_count(self) -> int:
-        return len(self.faces)
+        """Triangles traced (the placeholders of hair segments not counted)."""
+        return len(self.faces) - self.curve_segment_count
+
+    @property
+    def curve_segment_count(self) -> int:
+        """Hair curve segments traced (:mod:`render.hair`)."""
+        return sum(int(st.get("curve_segments", 0)) for st in self.stats)
 
     @property
     def packed(self) -> np.ndarray:
@@ -629,6 +687,20 @@ def modelling_summary(scene: Scene, geometry_stats: list) -> list[dict]:
     for obj, st in zip(scene.objects, geometry_stats, strict=True):
         m = obj.material
         field_ = obj.original_displacement or obj.displacement
+        if "curve_segments" in st:  # hair (render.hair): the material's hair field only
+            out.append({
+                "name": obj.name,
+                "geometry": (f"hair: {st['strands']:,} strands, {st['strand_segments']:,} "
+                             f"{st['curve_kind']} curve segments"
+                             + (f" (traced as {st['curve_segments']:,}: long thin ones split)"
+                                if st["curve_segments"] != st["strand_segments"] else "")
+                             + " (Embree round curves)"),
+                "triangles": 0, "diced": False, "displacement": "none",
+                "normal": "the fibre's (tangent and tube normal)",
+                "dfs": sorted(_df_names(m.hair)) or ["none (black)"],
+                "emits": False, "volume": False, "thin_walled": False, "cutout": False,
+            })
+            continue
         if st.get("diced"):
             err = st.get("max_error_px")
             geometry = (f"diced: {st['triangles']:,} triangles"
@@ -752,6 +824,54 @@ class _Locator:
         first, _ = self.section(name, index)
         return first, 1 if first else 0
 
+    def find_key(self, name: str, index: int | None, key: str,
+                 after: tuple[int, int] = (0, 0)) -> tuple[int, int]:
+        """(line, column) of ``key =`` anywhere in a table's lines (inside an inline
+        table too), at or after ``after``; (0, 0) if absent."""
+        pat = re.compile(r"(?:^|[\s{,])(" + re.escape(key) + r")\s*=")
+        for s in self.sections:
+            if not (s[0] == name or s[0].startswith(name + ".")) or (
+                index is not None and s[1] != index
+            ):
+                continue
+            for ln in range(max(s[2], after[0]), s[3] + 1):
+                text = self.lines[ln - 1].split("#", 1)[0]
+                start = after[1] if ln == after[0] else 0
+                m = pat.search(text, max(start - 1, 0))
+                if m:
+                    return ln, m.start(1) + 1
+        return 0, 0
+
+    def array_item(self, line: int, column: int, path) -> tuple[int, int]:
+        """(line, column) of the element at index ``path`` (a tuple: ``(i,)`` or
+        ``(i, j)`` for nested arrays) of the array assigned by the ``key =`` at
+        ``line``:``column``; the deepest element found if the path runs out."""
+        text = self.text
+        if not line:
+            return 0, 0
+        i = text.find("=", self.line_start[line - 1] + column - 1)
+        if i < 0:
+            return line, column
+        i = _skip_blank(text, i + 1)
+        found = i
+        for want in path:
+            if i >= len(text) or text[i] != "[":
+                break
+            i = _skip_blank(text, i + 1, newlines=True)
+            k = 0
+            while i < len(text) and text[i] != "]" and k < want:
+                i = _skip_blank(text, _skip_value(text, i), newlines=True)
+                if i < len(text) and text[i] == ",":
+                    i = _skip_blank(text, i + 1, newlines=True)
+                    k += 1
+                else:
+                    break
+            if k != want or i >= len(text) or text[i] == "]":
+                break
+            found = i
+        ln = text.count("\n", 0, found) + 1
+        return ln, found - self.line_start[ln - 1] + 1
+
     def value_position(self, line: int, offset: int) -> tuple[int, int]:
         """(line, column) of the character ``offset`` characters into the string value
         on ``line`` (after the opening quotes), when the string has no escapes."""
@@ -772,6 +892,52 @@ class _Locator:
         at = pos + min(offset, len(raw))
         ln = self.text.count("\n", 0, at) + 1
         return ln, at - self.line_start[ln - 1] + 1
+
+
+def _skip_blank(text: str, i: int, newlines: bool = False) -> int:
+    """The first position at or after ``i`` that is not blank (nor a comment, nor with
+    ``newlines`` a line break)."""
+    while i < len(text):
+        ch = text[i]
+        if ch == "#":
+            j = text.find("\n", i)
+            i = len(text) if j < 0 else j
+        elif ch in " \t\r" or (newlines and ch == "\n"):
+            i += 1
+        else:
+            break
+    return i
+
+
+def _skip_value(text: str, i: int) -> int:
+    """The position just after the TOML value (array, inline table, string or bare
+    value) that starts at ``i``."""
+    if i >= len(text):
+        return i
+    ch = text[i]
+    if ch in "\"'":
+        quote = text[i:i + 3] if text[i:i + 3] in ('"""', "'''") else ch
+        j = i + len(quote)
+        while j < len(text):
+            if ch == '"' and text[j] == "\\":
+                j += 2
+                continue
+            if text.startswith(quote, j):
+                return j + len(quote)
+            j += 1
+        return j
+    if ch in "[{":
+        close = "]" if ch == "[" else "}"
+        j = _skip_blank(text, i + 1, newlines=True)
+        while j < len(text) and text[j] != close:
+            j = _skip_blank(text, _skip_value(text, j), newlines=True)
+            if j < len(text) and text[j] in ",=":
+                j = _skip_blank(text, j + 1, newlines=True)
+        return j + 1
+    j = i
+    while j < len(text) and text[j] not in ",]}\n#=":
+        j += 1
+    return j
 
 
 def _in_multiline_string(text: str, pos: int) -> bool:
@@ -1154,6 +1320,34 @@ class _Parser:
         except ValueError as e:
             raise self.error(f"{section}[{i}]: {e}", section, i, "scale") from None
 
+    def curves(self, spec, i: int):
+        """``curves = { type = "polylines" | "bezier" | "fringe", ... }``: hair strands
+        (:func:`render.hair.from_table`)."""
+        from render.hair import StrandsError, from_table
+
+        if not isinstance(spec, dict):
+            raise self.error(f"objects[{i}]: curves must be a table {{ type = \"polylines\", "
+                             f"points = [...], radius = ... }}, got {spec!r}", "objects", i,
+                             "curves")
+        try:
+            return from_table(spec)
+        except StrandsError as e:
+            raise self.strands_error(e, i) from None
+
+    def strands_error(self, e, i: int) -> SceneError:
+        """A :class:`render.hair.StrandsError` of ``objects[i]`` located in the file: at
+        the strand (and point) it names, else at its key in the curves table."""
+        where = self.loc.find_key("objects", i, "curves")
+        if not where[0]:
+            where = self.loc.section("objects.curves", i)[0], 1
+        line, col = self.loc.find_key("objects", i, e.key, where) if e.key else (0, 0)
+        if line and e.strand is not None and e.key in ("points", "radii"):
+            path = (e.strand,) if e.point is None else (e.strand, e.point)
+            line, col = self.loc.array_item(line, col, path)
+        if not line:
+            line, col = where
+        return SceneError(f"objects[{i}]: curves: {e}", self.path, line, col if line else 0)
+
     def surface(self, spec, i: int):
         from displacement import surfaces
         from displacement.view import make_surface
@@ -1335,6 +1529,7 @@ class _Parser:
             "name",
             "surface",
             "mesh",
+            "curves",
             "material",
             "translate",
             "rotate",
@@ -1347,10 +1542,13 @@ class _Parser:
             "normal_map_bits",
         }
         self._check_keys(t, allowed, "objects", i)
-        if ("surface" in t) == ("mesh" in t):
+        if sum(k in t for k in ("surface", "mesh", "curves")) != 1:
             raise self.error(
-                f"objects[{i}]: give exactly one of surface = NAME or mesh = PATH", "objects", i
+                f"objects[{i}]: give exactly one of surface = NAME, mesh = PATH or curves = "
+                "{ type = ... } (hair strands)", "objects", i
             )
+        if "curves" in t:
+            return self.hair_object(t, i)
         surface = self.surface(t["surface"], i) if "surface" in t else self.mesh(t["mesh"], i)
         if "material" not in t:
             raise self.error(
@@ -1392,6 +1590,35 @@ class _Parser:
             original_displacement=written if method != "displacement" else None,
             **dicing,
         )
+
+    def hair_object(self, t: dict, i: int) -> SceneObject:
+        """An object of hair strands (``curves = {...}``): its strands, checked in world
+        space, and a material whose ``hair`` field shades them (MDL: nothing else of the
+        material applies to hair)."""
+        from render.hair import StrandsError, check_hair_bsdf
+
+        for key in ("resolution", "dicing_rate", "dicing_tolerance", "displacement_method",
+                    "normal_map_size", "normal_map_bits"):
+            if key in t:
+                raise self.error(f"objects[{i}]: {key} applies to surfaces, not to hair "
+                                 "strands (curves); remove it", "objects", i, key)
+        surface = self.curves(t["curves"], i)
+        if "material" not in t:
+            raise self.error(
+                f"objects[{i}]: missing material, e.g. \"material(hair: "
+                "df::chiang_hair_bsdf(roughness_R: float2(0.2, 0.3)))\"", "objects", i)
+        material = self.material(t["material"], i)
+        try:
+            check_hair_bsdf(material.hair)
+        except ValueError as e:
+            raise self.error(f"objects[{i}]: material: {e}", "objects", i, "material") from None
+        transform = self.transform(t, "objects", i)
+        try:
+            surface.world(transform)
+        except StrandsError as e:
+            raise self.strands_error(e, i) from None
+        return SceneObject(surface, material, transform, str(t.get("name", f"object{i}")), None,
+                           t["material"])
 
     def light(self, t: dict, i: int):
         kinds = {"point", "spot", "directional", "environment", "sun_and_sky", "quad", "sphere"}

@@ -23,6 +23,7 @@ BENCHMARKS = {
     "displaced_vs_mitsuba.py": ["--quick"],
     "light_selection.py": ["--quick"],
     "mdl_speed.py": ["--quick"],
+    "hair.py": ["--quick"],
 }
 
 

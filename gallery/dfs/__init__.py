@@ -27,7 +27,7 @@ import numpy as np
 
 from gallery.figures import Figure
 
-__all__ = ["DFS", "ROUGHNESS", "scenes_dir", "reference_dir", "figures", "write_scenes",
+__all__ = ["DFS", "HAIR_DFS", "ROUGHNESS", "scenes_dir", "reference_dir", "figures", "write_scenes",
            "write_mbsdf_files", "write_page", "main"]
 
 HERE = Path(__file__).resolve().parent
@@ -94,7 +94,14 @@ DFS = {
     "dusty_diffuse_reflection_bsdf": (
         "d'Eon's Lambertian-sphere (dusty) diffuse, grey",
         "df::dusty_diffuse_reflection_bsdf(tint: color({v}))", ("tint", (0.25, 0.5, 0.9))),
+    "chiang_hair_bsdf": (
+        "three fringes of gold silk hanging from a molding (hair geometry: cubic Bézier "
+        "strands, material.hair), roughness_R = (r, r)",
+        "df::chiang_hair_bsdf(roughness_R: float2({r}, {r}), absorption_coefficient: "
+        "color(0.05, 0.18, 0.7), ior: 1.55)"),
 }
+#: the dfs shown on hair strands (material.hair): a fringe on a molding, not spheres
+HAIR_DFS = frozenset({"chiang_hair_bsdf"})
 
 _STAGE = """
 [camera]
@@ -154,7 +161,33 @@ def _varies(name: str) -> tuple[str, tuple]:
 
 def _expression(name: str, r: float, k: int) -> str:
     body = DFS[name][1].format(r=r, r3=round(3 * r, 6), k=k, v=_varies(name)[1][k])
+    if name in HAIR_DFS:
+        return f"material(hair: {body})"
     return f"material(surface: material_surface(scattering: {body}))"
+
+
+#: the molding of the hair scenes: a wooden rail along x (a cylinder on its side)
+_MOLDING = """[[objects]]
+name = "molding"
+surface = { type = "cylinder", radius = 0.07, height = 3.8 }
+rotate = [0.0, 0.0, 90.0]
+translate = [0.0, 0.98, 0.0]
+material = "material(surface: material_surface(scattering: df::diffuse_reflection_bsdf(tint: \
+color(0.32, 0.18, 0.09))))"
+"""
+
+
+def _hair_objects(name: str) -> list[str]:
+    """Three fringes hanging from the molding, the df at the page's roughnesses."""
+    out = [_MOLDING]
+    for j, (x, r) in enumerate(zip((-1.1, 0.0, 1.1), ROUGHNESS, strict=True)):
+        out.append(f"""[[objects]]
+name = "fringe_{j}"
+curves = {{ type = "fringe", start = [{x - 0.45:.2f}, 0.95, 0.0], end = [{x + 0.45:.2f}, 0.95, \
+0.0], count = 96, length = 0.75, radius = 0.006, sway = 0.06, curl = 0.015, seed = {j} }}
+material = \"\"\"{_expression(name, r, j)}\"\"\"
+""")
+    return out
 
 
 def write_scenes(folder: Path | None = None) -> list[Path]:
@@ -167,6 +200,12 @@ def write_scenes(folder: Path | None = None) -> list[Path]:
         lines = [f"# Distribution functions {i}: df::{name}",
                  f"# {what}; {label} {', '.join(map(str, values))} from left to right.",
                  _STAGE]
+        if name in HAIR_DFS:
+            lines += _hair_objects(name)
+            path = folder / f"df_{name}.toml"
+            path.write_text("\n".join(lines), encoding="utf-8")
+            out.append(path)
+            continue
         for j, (x, r) in enumerate(zip((-1.1, 0.0, 1.1), ROUGHNESS, strict=True)):
             lines.append(f"""[[objects]]
 name = "sphere_{j}"
