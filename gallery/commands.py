@@ -151,6 +151,10 @@ def _rendered(args, figs):
         return args.resolution or fig.resolution
 
     if not _on_cluster(args):
+        if not args.quiet:
+            from render.jit import notice_first_compile
+
+            notice_first_compile("pwc gallery")
         for fig in figs:
             yield fig, render_figure(fig, args.spp, args.seed, resolution=size(fig),
                                      progress=_progress(args), denoise=args.denoise,

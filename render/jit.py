@@ -25,12 +25,13 @@ from __future__ import annotations
 
 import hashlib
 import os
+import sys
 from pathlib import Path
 
 import numba
 from numba.core.caching import CacheImpl, _CacheLocator
 
-__all__ = ["njit", "cache_dir", "SOURCE_KEY"]
+__all__ = ["njit", "cache_dir", "notice_first_compile", "SOURCE_KEY"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -59,6 +60,15 @@ def cache_dir() -> Path:
         xdg = os.environ.get("XDG_CACHE_HOME")
         base = (Path(xdg) if xdg else Path.home() / ".cache") / "pwc-workbench"
     return base / f"numba-{numba.__version__}-{SOURCE_KEY}"
+
+
+def notice_first_compile(prog: str) -> None:
+    """One line on stderr before the first render on a machine: the kernels compile then
+    (a cold cache is a kernel folder with no index files yet), which takes a while."""
+    folder = cache_dir()
+    if not (folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None):
+        print(f"{prog}: compiling render kernels, once per machine (a minute or two; "
+              f"cached in {folder})", file=sys.stderr)
 
 
 class _RenderCacheLocator(_CacheLocator):

@@ -152,7 +152,9 @@ def run(args) -> int:
         # an image too large for memory is refused before the scene is diced
         check_film_memory(scene.camera.width, scene.camera.height, aovs, denoise)
         if not args.quiet:
-            _notice_first_compile()
+            from render.jit import notice_first_compile
+
+            notice_first_compile("pwc render")
         # a bar redrawn with carriage returns only on a terminal, not into a log
         progress = not args.quiet and sys.stderr.isatty()
         if args.scheduler or args.workers:
@@ -237,14 +239,3 @@ def _scene_file(arg: str) -> Path:
         return p
     bundled = bundled_scenes() / (arg if arg.endswith(".toml") else f"{arg}.toml")
     return bundled if bundled.is_file() else p
-
-
-def _notice_first_compile() -> None:
-    """One line before the first render on a machine: the numba kernels compile then
-    (a cold cache is a kernel folder with no index files yet), which takes a while."""
-    from render.jit import cache_dir
-
-    folder = cache_dir()
-    if not (folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None):
-        print("pwc render: compiling render kernels, once per machine (a minute or two; "
-              f"cached in {folder})", file=sys.stderr)

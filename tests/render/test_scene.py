@@ -509,16 +509,15 @@ def test_pwc_render_own_profile_outputs_checked_first_and_summary(tmp_path):
 
 
 def test_first_compile_notice_only_on_a_cold_cache(tmp_path, monkeypatch, capsys):
-    from render.commands.render import _notice_first_compile
-    from render.jit import cache_dir
+    from render.jit import cache_dir, notice_first_compile
 
     monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
-    _notice_first_compile()
+    notice_first_compile("pwc render")
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "compiling render kernels, once per machine" in err
     (cache_dir() / "compiled").mkdir(parents=True)
     (cache_dir() / "compiled" / "kernel-12.py311.nbi").write_bytes(b"")
-    _notice_first_compile()
+    notice_first_compile("pwc render")
     assert capsys.readouterr().err == ""
 
 
