@@ -19,6 +19,7 @@ __all__ = [
     "DoWhile", "For", "Break", "Continue", "Return", "Empty", "Stmt",
     "Import", "Using", "ModuleAnnotations", "ConstDecl", "Typedef", "StructDecl", "Field",
     "EnumDecl", "EnumValue", "Param", "FunctionDecl", "AnnotationDecl", "Module",
+    "children",
 ]
 
 
@@ -387,3 +388,13 @@ class AnnotationDecl(Node):
 class Module(Node):
     version: tuple[int, int] | None
     decls: tuple[object, ...]
+
+
+def children(node: Node):
+    """The nodes directly below ``node``, in field order (a tuple field's nodes in turn)."""
+    for f in node.__dataclass_fields__:
+        v = getattr(node, f)
+        if isinstance(v, Node):
+            yield v
+        elif isinstance(v, tuple):
+            yield from (x for x in v if isinstance(x, Node))

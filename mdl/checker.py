@@ -726,10 +726,8 @@ class Checker:
                         info.call.kind == "overload" and info.call.target.module is self.m \
                         and info.call.target.kind == "mdl":
                     sites.append((info.call.target, x))
-                if isinstance(x, (A.Node, tuple)):
-                    items = x if isinstance(x, tuple) else [getattr(x, f) for f in
-                                                            x.__dataclass_fields__]
-                    stack.extend(v for v in items if isinstance(v, (A.Node, tuple)))
+                if isinstance(x, A.Node):
+                    stack.extend(A.children(x))
             edges[o] = sorted(sites, key=lambda s: s[1].span.start)
         reported = set()
         for o in own:
@@ -769,12 +767,8 @@ class Checker:
             x = stack.pop()
             if isinstance(x, A.Call) and isinstance(x.callee, A.Ref):
                 out.append(x.callee.name)
-            if isinstance(x, A.Node) or isinstance(x, tuple):
-                items = x if isinstance(x, tuple) else [getattr(x, f) for f in
-                                                        x.__dataclass_fields__]
-                for v in items:
-                    if isinstance(v, (A.Node, tuple)):
-                        stack.append(v)
+            if isinstance(x, A.Node):
+                stack.extend(A.children(x))
         return out
 
     def name_reads_state(self, name: A.Name) -> bool:

@@ -24,7 +24,8 @@ form) and Draine by solving ``F(mu) = u`` with Newton's method bracketed by bise
 its closed-form CDF (the antiderivative of ``(1 + alpha mu^2) s^(-3/2)``,
 ``s = 1 + g^2 - 2 g mu``; below ``|g| = 0.05``, where that form loses digits, 16-point
 Gauss–Legendre quadrature, exact to rounding there).  As a vdf, ``eval`` is ``p`` in
-every channel and ``albedo`` is 1; directions in any orthonormal frame (world space in
+every channel and the albedo is 1 (the interpreter reads every vdf's from
+:func:`render.df.anisotropic_vdf.albedo`); directions in any orthonormal frame (world space in
 the integrator).  The lobe flag is DIFFUSE_REFLECTION when ``wi`` returns to the
 viewer's side, else DIFFUSE_TRANSMISSION (as ``anisotropic_vdf``).
 
@@ -45,8 +46,8 @@ from render.df._signature import Param, Signature
 from render.jit import njit
 from render.program import O_FOG_VDF, df_class
 
-__all__ = ["FogVdf", "fog_vdf", "SIGNATURE", "eval_pdf", "sample", "albedo",
-           "fog_parameters", "D_MIN", "D_MAX"]
+__all__ = ["FogVdf", "fog_vdf", "SIGNATURE", "eval_pdf", "sample", "fog_parameters", "D_MIN",
+           "D_MAX"]
 
 #: the droplet diameters (micrometres) the fit covers; ``particle_size`` is clamped to them
 D_MIN, D_MAX = 0.1, 50.0
@@ -220,12 +221,6 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     back = kc.dot3(wix, wiy, wiz, wox, woy, woz) > 0.0
     lobe = kc.LOBE_DIFFUSE_REFLECTION if back else kc.LOBE_DIFFUSE_TRANSMISSION
     return wix, wiy, wiz, pdf, 1.0, 1.0, 1.0, lobe
-
-
-@njit
-def albedo(P, row, b, flags, wox, woy, woz):
-    """1 (the medium's single-scattering albedo is applied by :mod:`render.volume`)."""
-    return 1.0, 1.0, 1.0
 
 
 def _check(values: dict) -> None:

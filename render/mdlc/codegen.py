@@ -980,12 +980,7 @@ def _has_side_effects(e) -> bool:
                 "++", "--")):
             return True
         if isinstance(x, A.Node):
-            for f in x.__dataclass_fields__:
-                v = getattr(x, f)
-                if isinstance(v, A.Node):
-                    stack.append(v)
-                elif isinstance(v, tuple):
-                    stack.extend(y for y in v if isinstance(y, A.Node))
+            stack.extend(A.children(x))
     return False
 
 

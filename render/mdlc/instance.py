@@ -473,12 +473,7 @@ class Instantiator:
                 out.append(x)
                 continue
             if isinstance(x, A.Node):
-                for f in x.__dataclass_fields__:
-                    v = getattr(x, f)
-                    if isinstance(v, A.Node):
-                        stack.append(v)
-                    elif isinstance(v, tuple):
-                        stack.extend(y for y in v if isinstance(y, A.Node))
+                stack.extend(A.children(x))
         return out
 
     def lane_value(self, m, e, env):

@@ -89,14 +89,8 @@ class _Scan:
                 for p, a in zip(o.params, call.args, strict=False):
                     if a is None and p.default is not None:
                         self.node(o.module, p.default, None)
-        for f in getattr(x, "__dataclass_fields__", ()):
-            v = getattr(x, f)
-            if isinstance(v, A.Node):
-                self.node(m, v, x)
-            elif isinstance(v, tuple):
-                for y in v:
-                    if isinstance(y, A.Node):
-                        self.node(m, y, x)
+        for y in A.children(x) if isinstance(x, A.Node) else ():
+            self.node(m, y, x)
 
 
 def _component(m, parent):
