@@ -48,9 +48,9 @@ inversion of Heitz & d'Eon 2014 for Beckmann), as the generic kernels
 with its distribution and masking.
 
 **Energy compensation** (``multiscatter_tint``, libbsdf's Kelemen & Szirmay-Kalos lobe,
-reference §2.4), shared by every glossy lobe (:func:`ms_eval`, :func:`ms_sample`): in
-``scatter_reflect`` and ``scatter_reflect_transmit`` a diffuse-like reflection lobe is
-added::
+reference §2.4), shared by every glossy lobe (:func:`ms_lobe`, :func:`ms_eval`,
+:func:`ms_choice`, :func:`ms_sampled`): in ``scatter_reflect`` and
+``scatter_reflect_transmit`` a diffuse-like reflection lobe is added::
 
     f_ms = saturate(multiscatter_tint) (1 - E(wo)) (1 - E(wi)) |wi.z| / (pi (1 - E_avg))
     pdf  = E(wo) pdf_glossy + (1 - E(wo)) |wi.z| / pi       (reflection side)
@@ -88,8 +88,8 @@ from render.jit import njit
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
            "mf_sample_dir", "GGX", "BECKMANN", "VCAVITIES", "SMITH", "mf_d", "mf_smith_g1",
            "mf_sample_d_cos", "mf_sample_visible", "mf_eval_pdf", "mf_sample", "mf_albedo",
-           "ms_eval", "ms_choice", "ms_on", "ms_albedo", "microfacet_signature", "mf_film_event",
-           "mf_film_on"]
+           "ms_lobe", "ms_eval", "ms_choice", "ms_sampled", "ms_on", "ms_albedo",
+           "microfacet_signature", "mf_film_event", "mf_film_on"]
 
 _TR = int(Lobe.GLOSSY_TRANSMISSION)
 _RE = int(Lobe.GLOSSY_REFLECTION)
@@ -526,12 +526,21 @@ def ms_albedo(T, t, flip, ru, rv, io, ii, tx, ty, ox, oy, oz):
 
 
 @njit
-def ms_eval(T, t, flip, ru, rv, io, ii, tx, ty, m0, m1, m2, glossy,
-            ox, oy, oz, ix, iy, iz, f0, f1, f2, pdf_g):
-    """The lobe with its compensation at an oriented pair (``wo.z > 0``): the
-    single-scattering eval ``f`` and pdf ``pdf_g`` plus the compensation lobe ->
-    ``(f0, f1, f2, pdf)`` (0 where nothing scatters).  ``glossy``: the single-scattering
-    lobe can scatter (its tint is not black), else it is never picked."""
+def ms_lobe(P, row, at_ms, ru, rv, io, ii, tx, ty, glossy):
+    """The compensation lobe's inputs as one tuple: the table's coordinates (roughness
+    ``ru``, ``rv``, at least ``ROUGHNESS_MIN``; the iors; the tangent axes), the
+    ``multiscatter_tint`` at column ``at_ms`` of ``P`` and whether the single-scattering
+    lobe can scatter (its tint is not black; else it is never picked)."""
+    return (max(ru, kc.ROUGHNESS_MIN), max(rv, kc.ROUGHNESS_MIN), io, ii, tx, ty,
+            P[row, at_ms], P[row, at_ms + 1], P[row, at_ms + 2], glossy)
+
+
+@njit
+def ms_eval(T, t, flip, c, ox, oy, oz, ix, iy, iz, f0, f1, f2, pdf_g):
+    """The lobe with its compensation (``c``: :func:`ms_lobe`) at an oriented pair
+    (``wo.z > 0``): the single-scattering eval ``f`` and pdf ``pdf_g`` plus the
+    compensation lobe -> ``(f0, f1, f2, pdf)`` (0 where nothing scatters)."""
+    ru, rv, io, ii, tx, ty, m0, m1, m2, glossy = c
     E1 = ms_albedo(T, t, flip, ru, rv, io, ii, tx, ty, ox, oy, oz)
     s = E1 if glossy else 0.0
     pdf = s * pdf_g
@@ -550,14 +559,29 @@ def ms_eval(T, t, flip, ru, rv, io, ii, tx, ty, m0, m1, m2, glossy,
 
 
 @njit
-def ms_choice(T, t, flip, ru, rv, io, ii, tx, ty, glossy, ox, oy, oz, u1):
+def ms_choice(T, t, flip, c, ox, oy, oz, u1):
     """The lobe a sample takes: ``(single, u1')`` with the single-scattering lobe picked
     with probability ``E(wo)`` (0 for a black tint) and ``u1`` rescaled."""
+    ru, rv, io, ii, tx, ty, m0, m1, m2, glossy = c
     E1 = ms_albedo(T, t, flip, ru, rv, io, ii, tx, ty, ox, oy, oz)
     s = E1 if glossy else 0.0
     if u1 < s:
         return True, min(u1 / s, kc.ONE_MINUS_EPS)
     return False, min((u1 - s) / (1.0 - s), kc.ONE_MINUS_EPS) if s < 1.0 else 0.0
+
+
+@njit
+def ms_sampled(T, t, flip, c, single, ox, oy, oz, ix, iy, iz, w0, w1, w2, pdf):
+    """A sampled direction's weight with the compensation: the single-scattering lobe's
+    weight ``w`` and pdf at the drawn ``wi`` (drawn by it where ``single``, else by the
+    cosine lobe) -> ``(w0, w1, w2, pdf)`` of the whole, pdf 0 where the sample fails."""
+    if single and not pdf > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    f0, f1, f2, pdf = ms_eval(T, t, flip, c, ox, oy, oz, ix, iy, iz,
+                              w0 * pdf, w1 * pdf, w2 * pdf, pdf)
+    if not pdf > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return f0 / pdf, f1 / pdf, f2 / pdf, pdf
 
 
 # --- the microfacet_* dfs: generic kernels over (dist, mask) ------------------------------
@@ -579,6 +603,13 @@ def _setup(P, row, b, flags, flip):
         ok = False
     eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_WALLED) != 0, True)
     return ok, au, av, tx, ty, eta1, eta2, glossy, ms
+
+
+@njit
+def _ms_lobe(P, row, b, au, av, tx, ty, glossy):
+    """:func:`ms_lobe` of a lane of a microfacet_* df."""
+    return ms_lobe(P, row, b + _MS, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN], tx, ty,
+                   glossy)
 
 
 @njit
@@ -644,8 +675,7 @@ def mf_eval_pdf(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t
         return f0, f1, f2, pdf
     if not woz > kc.COS_ZERO:
         return 0.0, 0.0, 0.0, 0.0
-    return ms_eval(T, t, flip, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN], tx, ty,
-                   P[row, b + _MS], P[row, b + _MS + 1], P[row, b + _MS + 2], glossy,
+    return ms_eval(T, t, flip, _ms_lobe(P, row, b, au, av, tx, ty, glossy),
                    wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf)
 
 
@@ -662,9 +692,9 @@ def mf_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     if not (ok and woz > kc.COS_ZERO):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     single = True
+    c = _ms_lobe(P, row, b, au, av, tx, ty, glossy)
     if ms:
-        single, u1 = ms_choice(T, t, flip, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN],
-                               tx, ty, glossy, wox, woy, woz, u1)
+        single, u1 = ms_choice(T, t, flip, c, wox, woy, woz, u1)
     if single:
         ok, wix, wiy, wiz = _single_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1,
                                            u2x, u2y, au, av, tx, ty, eta1, eta2)
@@ -675,15 +705,8 @@ def mf_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     w0, w1, w2, pdf = _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                              au, av, tx, ty, eta1, eta2)
     if ms:
-        if single and not pdf > 0.0:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        f0, f1, f2, pdf = ms_eval(T, t, flip, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN],
-                                  tx, ty, P[row, b + _MS], P[row, b + _MS + 1],
-                                  P[row, b + _MS + 2], glossy, wox, woy, woz, wix, wiy, wiz,
-                                  w0 * pdf, w1 * pdf, w2 * pdf, pdf)
-        if not pdf > 0.0:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        w0, w1, w2 = f0 / pdf, f1 / pdf, f2 / pdf
+        w0, w1, w2, pdf = ms_sampled(T, t, flip, c, single, wox, woy, woz, wix, wiy, wiz,
+                                     w0, w1, w2, pdf)
     if not pdf > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     lobe = _TR if wiz < 0.0 else _RE

@@ -45,7 +45,9 @@ from render.df._microfacet import (
     ms_albedo,
     ms_choice,
     ms_eval,
+    ms_lobe,
     ms_on,
+    ms_sampled,
 )
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
@@ -122,10 +124,10 @@ def _single_sample(wox, woy, woz, u1, u2x, u2y, q):
 
 
 @njit
-def _ms(P, row, b, glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf, T, t):
-    r = max(P[row, b + _R], kc.ROUGHNESS_MIN)
-    return ms_eval(T, t, False, r, r, 1.0, 1.0, 1.0, 0.0, P[row, b + _MS], P[row, b + _MS + 1],
-                   P[row, b + _MS + 2], glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf)
+def _ms_lobe(P, row, b, glossy):
+    """:func:`ms_lobe` of a lane (isotropic: any tangent)."""
+    r = P[row, b + _R]
+    return ms_lobe(P, row, b + _MS, r, r, 1.0, 1.0, 1.0, 0.0, glossy)
 
 
 @njit
@@ -142,8 +144,8 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
         return w0 * pdf, w1 * pdf, w2 * pdf, pdf
     if not woz > kc.COS_ZERO:
         return 0.0, 0.0, 0.0, 0.0
-    return _ms(P, row, b, glossy, wox, woy, woz, wix, wiy, wiz, w0 * pdf, w1 * pdf, w2 * pdf,
-               pdf, T, t)
+    return ms_eval(T, t, False, _ms_lobe(P, row, b, glossy), wox, woy, woz, wix, wiy, wiz,
+                   w0 * pdf, w1 * pdf, w2 * pdf, pdf)
 
 
 @njit
@@ -159,9 +161,9 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     if not (ok and woz > kc.COS_ZERO):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     single = True
+    c = _ms_lobe(P, row, b, glossy)
     if ms:
-        r = max(P[row, b + _R], kc.ROUGHNESS_MIN)
-        single, u1 = ms_choice(T, t, False, r, r, 1.0, 1.0, 1.0, 0.0, glossy, wox, woy, woz, u1)
+        single, u1 = ms_choice(T, t, False, c, wox, woy, woz, u1)
     if single:
         ok, wix, wiy, wiz = _single_sample(wox, woy, woz, u1, u2x, u2y, q)
         if not ok:
@@ -170,12 +172,8 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
         wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
     w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, q)
     if ms:
-        if single and not pdf > 0.0:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        f0, f1, f2, pdf = _ms(P, row, b, glossy, wox, woy, woz, wix, wiy, wiz, w0 * pdf,
-                              w1 * pdf, w2 * pdf, pdf, T, t)
-        if pdf > 0.0:
-            w0, w1, w2 = f0 / pdf, f1 / pdf, f2 / pdf
+        w0, w1, w2, pdf = ms_sampled(T, t, False, c, single, wox, woy, woz, wix, wiy, wiz,
+                                     w0, w1, w2, pdf)
     if not pdf > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     if flip:

@@ -62,7 +62,9 @@ from render.df._microfacet import (
     microfacet_signature,
     ms_choice,
     ms_eval,
+    ms_lobe,
     ms_on,
+    ms_sampled,
 )
 from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED
 from render.jit import njit
@@ -192,12 +194,10 @@ def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, t
 
 
 @njit
-def _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf, T, t):
-    """the compensation lobe added to an oriented evaluation (:func:`ms_eval`)."""
-    return ms_eval(T, t, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
-                   max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
-                   P[row, b + _IOR_IN], tx, ty, P[row, b + _MS], P[row, b + _MS + 1],
-                   P[row, b + _MS + 2], glossy, wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf)
+def _ms_lobe(P, row, b, tx, ty, glossy):
+    """:func:`ms_lobe` of a lane (the table's roughness: the parameters, not exponents)."""
+    return ms_lobe(P, row, b + _MS, P[row, b + _RU], P[row, b + _RV], P[row, b + _IOR_OUT],
+                   P[row, b + _IOR_IN], tx, ty, glossy)
 
 
 @njit
@@ -217,8 +217,8 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
         return w0 * pdf, w1 * pdf, w2 * pdf, pdf
     if not woz > kc.COS_ZERO:
         return 0.0, 0.0, 0.0, 0.0
-    return _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
-               w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
+    return ms_eval(T, t, flip, _ms_lobe(P, row, b, tx, ty, glossy), wox, woy, woz,
+                   wix, wiy, wiz, w0 * pdf, w1 * pdf, w2 * pdf, pdf)
 
 
 @njit
@@ -244,12 +244,11 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     if not ok:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     single = True
+    c = _ms_lobe(P, row, b, tx, ty, glossy)
     if ms:
         if not woz > kc.COS_ZERO:
             return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        single, u1 = ms_choice(T, t, flip, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
-                               max(P[row, b + _RV], kc.ROUGHNESS_MIN), P[row, b + _IOR_OUT],
-                               P[row, b + _IOR_IN], tx, ty, glossy, wox, woy, woz, u1)
+        single, u1 = ms_choice(T, t, flip, c, wox, woy, woz, u1)
     if single:
         ok, wix, wiy, wiz = _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y,
                                            e_u, e_v, tx, ty, eta1, eta2)
@@ -260,12 +259,8 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
                              e_u, e_v, norm, tx, ty, eta1, eta2)
     if ms:
-        if single and not pdf > 0.0:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        f0, f1, f2, pdf = _ms(P, row, b, flip, tx, ty, glossy, wox, woy, woz, wix, wiy, wiz,
-                              w0 * pdf, w1 * pdf, w2 * pdf, pdf, T, t)
-        if pdf > 0.0:
-            w0, w1, w2 = f0 / pdf, f1 / pdf, f2 / pdf
+        w0, w1, w2, pdf = ms_sampled(T, t, flip, c, single, wox, woy, woz, wix, wiy, wiz,
+                                     w0, w1, w2, pdf)
     if not pdf > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     lobe = _GLOSSY_T if wiz < 0.0 else _GLOSSY_R
