@@ -35,7 +35,8 @@ __all__ = ["parse_module", "parse_expression", "MAX_DEPTH", "SUPPORTED_VERSIONS"
 #: deepest nesting of parentheses, calls, blocks accepted (deeper: an error, not a crash)
 MAX_DEPTH = 100
 #: MDL versions this front end reads
-SUPPORTED_VERSIONS = tuple((1, m) for m in range(10))
+#: MDL 1.0 to 1.10 (1.10 adds distribution functions and parameters, no syntax)
+SUPPORTED_VERSIONS = tuple((1, m) for m in range(11))
 
 _ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=", ">>>=")
 # binary operators by precedence, lowest first (C's)
@@ -218,7 +219,7 @@ class _Parser:
             self.fail(f"malformed MDL version '{t.text}'", t, fix="write e.g. 'mdl 1.6;'")
         if (major, minor) not in SUPPORTED_VERSIONS:
             self.fail(f"unsupported MDL version {major}.{minor}", t,
-                      fix="this front end reads MDL 1.0 to 1.9; write e.g. 'mdl 1.6;'")
+                      fix="this front end reads MDL 1.0 to 1.10; write e.g. 'mdl 1.6;'")
         self.version = (major, minor)
         self.expect(";", fix="end the version line with ';'")
         del mdl

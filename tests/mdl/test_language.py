@@ -231,7 +231,7 @@ INVALID = [
     ("bad octal", "mdl 1.6;\nconst int x = 09;\n", 2, "invalid octal literal", None),
     ("missing header", "// pw curves\nconst float x = 1.0;\n", 2,
      "missing 'mdl 1.x;' version header", "mdl 1.6;"),
-    ("bad version", "mdl 2.0;\n", 1, "unsupported MDL version", "1.0 to 1.9"),
+    ("bad version", "mdl 2.0;\n", 1, "unsupported MDL version", "1.0 to 1.10"),
     ("duplicate const", "mdl 1.6;\nconst float x = 1.0;\nconst int x = 2;\n", 3,
      "duplicate declaration of 'x'", None),
     ("duplicate enum value", "mdl 1.6;\nenum a { u, v };\nenum b { w,\n v };\n", 4,

@@ -238,3 +238,28 @@ def test_a_session_reuses_its_modules(module_dir):
     again, _ = session.material("striped(scale: 2.0)", module="looks.mdl")
     assert isinstance(first, M.material) and isinstance(again, M.material)
     assert len([q for q in session.loader.modules if q == "::looks"]) == 1
+
+
+MDL_1_10 = """\
+mdl 1.10;
+import ::df::*;
+
+export material velvet_under_lacquer(color absorption = color(0.2, 0.5, 0.9)) = material(
+    surface: material_surface(scattering: df::coat_absorption_factor(
+        ior: color(1.5), absorption_coefficient: absorption, thickness: 0.3,
+        base: df::microflake_sheen_bsdf(roughness: 0.4, tint: color(0.8, 0.2, 0.2),
+            multiscatter_tint: color(1.0)))));
+"""
+
+
+def test_an_mdl_1_10_module_uses_the_1_10_distribution_functions(tmp_path):
+    """``mdl 1.10;`` is read (1.10 adds distribution functions, no syntax), and its
+    dfs (microflake_sheen_bsdf, coat_absorption_factor) shade as the same material built
+    in Python."""
+    (tmp_path / "lacquer.mdl").write_text(MDL_1_10)
+    m, _ = material_from_call("velvet_under_lacquer()", "lacquer.mdl", base_dir=tmp_path)
+    assert_same_shading(m, M.material(surface=M.material_surface(
+        M.df.coat_absorption_factor(
+            ior=(1.5, 1.5, 1.5), absorption_coefficient=(0.2, 0.5, 0.9), thickness=0.3,
+            base=M.df.microflake_sheen_bsdf(roughness=0.4, tint=(0.8, 0.2, 0.2),
+                                            multiscatter_tint=(1.0, 1.0, 1.0))))))
