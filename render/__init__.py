@@ -5,11 +5,21 @@ Conventions for directions and frames: :mod:`render.frame`.  Interfaces: :mod:`r
 (see :func:`render.integrator.render`).
 """
 
-from render import df
+import importlib
+
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe
 from render.frame import Frame
 
 __all__ = ["df", "Bsdf", "BsdfSample", "Edf", "EdfSample", "Lobe", "Frame", "render"]
+
+
+def __getattr__(name: str):
+    """``render.df`` on first use: it imports numba and every kernel module (0.4 s), which
+    commands that only register their options (``pwc compile``, ``pwc --help``) never
+    need."""
+    if name == "df":
+        return importlib.import_module("render.df")
+    raise AttributeError(f"module 'render' has no attribute {name!r}")
 
 
 def render(scene, **options):
