@@ -28,13 +28,13 @@ _UNARY, _POSTFIX, _PRIMARY = 13, 14, 15
 def _prec(e) -> int:
     if isinstance(e, A.Sequence):
         return 0
-    if isinstance(e, A.Assign):
-        return 1
+    if isinstance(e, (A.Assign, A.Let)):  # a let's body runs on to the right as far as
+        return 1                            # an assignment's value: an operand needs ()
     if isinstance(e, A.Conditional):
         return 2
     if isinstance(e, A.Binary):
         return _PREC[e.op]
-    if isinstance(e, (A.Unary, A.Let)):
+    if isinstance(e, A.Unary):
         return _UNARY
     if isinstance(e, (A.Postfix, A.Call, A.Index, A.Member, A.ArrayType)):
         return _POSTFIX

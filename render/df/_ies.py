@@ -103,6 +103,19 @@ class LightProfile:
             flat_o[i] = table_intensity(t, 0, flat_g[i], flat_p[i])
         return out
 
+    @property
+    def power(self) -> float:
+        """``∫ I dw`` over the whole sphere (candela sr: lumens for a photometric
+        profile), of the bilinear interpolant the kernels evaluate: MDL's
+        ``df::light_profile_power``."""
+        h, c = _full_circle(self.horizontal, self.candela)
+        return profile_flux(self.vertical, h, c)
+
+    @property
+    def maximum(self) -> float:
+        """The largest intensity (candela): MDL's ``df::light_profile_maximum``."""
+        return float(self.candela.max())
+
 
 def _check_angles(v, h):
     """``(problem, fix)`` or None for type C angle grids."""
@@ -325,9 +338,15 @@ def _front(v: np.ndarray, c: np.ndarray):
 
 
 def front_flux(v_deg: np.ndarray, h_deg: np.ndarray, c: np.ndarray) -> float:
-    """``∫ I dw`` of the bilinear interpolant (in gamma and C) over gamma <= 90 degrees,
-    in closed form per cell (``∫ w(gamma) sin(gamma) dgamma`` of the linear weights)."""
+    """``∫ I dw`` of the bilinear interpolant over gamma <= 90 degrees (:func:`profile_flux`)."""
     v, cc = _front(v_deg, c)
+    return profile_flux(v, h_deg, cc)
+
+
+def profile_flux(v: np.ndarray, h_deg: np.ndarray, cc: np.ndarray) -> float:
+    """``∫ I dw`` of the bilinear interpolant (in gamma and C) over the vertical angles
+    ``v`` (degrees) and the horizontal angles ``h_deg`` (``cc``: ``(nh, nv)``), in closed
+    form per cell (``∫ w(gamma) sin(gamma) dgamma`` of the linear weights)."""
     if len(v) < 2:
         return 0.0
     g = np.radians(v)

@@ -37,7 +37,7 @@ from mdl.checker import Checker, is_material_level
 from mdl.entities import AUTO, UNIFORM, ConstEntity, EnumValueEntity, Local, Overload
 from render.mdlc import compiler
 from render.mdlc.knots import merge_knots
-from render.mdlc.natives import df_key, native_value
+from render.mdlc.natives import RESOURCE_QUERIES, df_key, native_value
 
 __all__ = ["Const", "Vary", "MaterialInstanceError", "Instantiator", "to_core"]
 
@@ -208,6 +208,8 @@ class Instantiator:
         kind = data.get("kind")
         kwargs = {p.name: to_core(args[p.name], p.type) for p in o.params if p.name in args}
         try:
+            if kind == "df" and o.name in RESOURCE_QUERIES:
+                return RESOURCE_QUERIES[o.name][2](**kwargs)
             if kind == "df":
                 if o.name == "fresnel_layer" and isinstance(o.params[0].type, T.Color):
                     from render.materials.chapter6 import fresnel_layer_of

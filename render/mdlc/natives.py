@@ -234,7 +234,25 @@ def _df_declarations() -> tuple[str, dict]:
             for comp in COMPONENT_KINDS[element][1:]:
                 fields = {f: _mdl_type_of(t).name for f, t, _ in DF_SIGNATURES[comp][1]}
                 declare(name, key, f"export {fields['component']} {name}({comp}[<N>] {p});")
+    out.append("")
+    for name, (ret, param, _) in RESOURCE_QUERIES.items():
+        out.append(f"export {ret} {name}(uniform {param}) uniform;")
     return "\n".join(out) + "\n", keys
+
+
+#: ``::df``'s queries of a resource (MDL 1.0; ``*_isvalid`` 1.2): name -> (return type,
+#: parameter, the value for the loaded resource or None, an invalid one).  Power is
+#: ``∫ I dw`` over the sphere of the profile's interpolant, maximum its largest candela.
+RESOURCE_QUERIES = {
+    "light_profile_power": ("float", "light_profile profile",
+                            lambda profile=None: 0.0 if profile is None else profile.power),
+    "light_profile_maximum": ("float", "light_profile profile",
+                              lambda profile=None: 0.0 if profile is None else profile.maximum),
+    "light_profile_isvalid": ("bool", "light_profile profile",
+                              lambda profile=None: profile is not None),
+    "bsdf_measurement_isvalid": ("bool", "bsdf_measurement measurement",
+                                 lambda measurement=None: measurement is not None),
+}
 
 
 def df_module_text() -> str:
@@ -535,6 +553,8 @@ def bind_native(overload, curves: dict | None = None):
     if data.get("kind") == "sky":
         def fn(**kwargs):
             return SkyFunction(sun_and_sky_light(**kwargs))
+    elif data.get("kind") == "df":
+        fn = RESOURCE_QUERIES[overload.name][2]
     else:
         from render.library.functions import FUNCTIONS
 

@@ -115,3 +115,62 @@ def test_a_malformed_profile_says_what_is_wrong(module, tmp_path):
         parse_material('material(surface: material_surface(emission: material_emission('
                        'df::measured_edf(light_profile("bad.ies")))))', base_dir=module)
     assert "bad.ies:7: candela value 2" in str(e.value)
+
+
+# --- df::light_profile_power / _maximum / _isvalid, df::bsdf_measurement_isvalid ---------
+def test_profile_power_is_the_integral_over_the_sphere(tmp_path):
+    """Power is ``∫ I dw`` of the interpolant the kernels evaluate, whole sphere: closed
+    forms for a constant and for an intensity linear in gamma; maximum the largest."""
+    iso = rdf.LightProfile(np.array([0.0, 90.0, 180.0]), np.array([0.0]),
+                           np.full((1, 3), 100.0))
+    assert iso.power == pytest.approx(400.0 * np.pi, rel=1e-12) and iso.maximum == 100.0
+    # 200 (1 - gamma / 90 deg) below the horizon: 2 pi * 200 (1 - 2/pi) = 400 pi - 800
+    gam = np.linspace(0.0, 90.0, 7)
+    lin = rdf.LightProfile(gam, np.array([0.0, 90.0]), np.tile(200.0 * (1 - gam / 90.0), (2, 1)))
+    assert lin.power == pytest.approx(400.0 * np.pi - 800.0, rel=1e-12)
+    assert lin.maximum == 200.0
+    # a quarter-symmetric file expands to the full circle: the same power as written out
+    # (cos sampled every degree: the interpolant's integral within 1e-4 of cos's)
+    rdf.write_ies(tmp_path / "q.ies", DEG, [0.0, 45.0, 90.0],
+                  np.vstack([100.0 * np.cos(np.radians(DEG))] * 3))
+    q = rdf.read_ies(tmp_path / "q.ies")
+    assert q.power == pytest.approx(2.0 * np.pi * 100.0 * 0.5, rel=1e-4)  # ∫ cos sin = 1/2
+
+
+QUERIES = """\
+mdl 1.6;
+import ::df::*;
+
+export float power() = df::light_profile_power(light_profile("lamp.ies"));
+export float maximum() = df::light_profile_maximum(light_profile("lamp.ies"));
+export bool valid() = df::light_profile_isvalid(light_profile("lamp.ies"));
+export bool missing_valid() = df::light_profile_isvalid(light_profile("none.ies"));
+export float missing_power() = df::light_profile_power(light_profile("none.ies"));
+export bool no_measurement() = df::bsdf_measurement_isvalid(bsdf_measurement("none.mbsdf"));
+
+export material normalised_lamp() = material(surface: material_surface(emission:
+    material_emission(df::measured_edf(light_profile("lamp.ies")),
+        color(1000.0 / df::light_profile_power(light_profile("lamp.ies"))))));
+"""
+
+
+def test_the_resource_queries_of_df_in_functions_and_materials(module, tmp_path):
+    """In functions, a missing resource is MDL's invalid one (isvalid false, power 0); in a
+    material's expression the queries' values reach the material."""
+    from displacement.surfaces import UnitSquare
+    from render.mdlc import run_function
+
+    (module / "queries.mdl").write_text(QUERIES, encoding="utf-8")
+    m = make_loader(module).load_file(module / "queries.mdl")
+    lamp = rdf.read_ies(module / "lamp.ies")
+    s = UnitSquare().state_at_uv(np.full((3, 2), 0.5))
+    assert np.allclose(run_function(m, "power", s), lamp.power)
+    assert lamp.power == pytest.approx(100.0 * np.pi, rel=1e-4)  # 2 pi * 100 * 1/2
+    assert np.allclose(run_function(m, "maximum", s), 100.0)
+    assert run_function(m, "valid", s).all()
+    assert not run_function(m, "missing_valid", s).any()
+    assert np.all(run_function(m, "missing_power", s) == 0.0)
+    assert not run_function(m, "no_measurement", s).any()
+    mat, _ = material_from_call("normalised_lamp()", "queries.mdl", base_dir=tmp_path,
+                                mdl_paths=[module])
+    assert np.allclose(mat.surface.emission.intensity, 1000.0 / lamp.power)
