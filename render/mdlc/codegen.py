@@ -963,9 +963,6 @@ class _FunctionGen:
         line, col = self.module.source.line_col(e.span.start)
         return f"{self.module.source.name}:{line}:{col}"
 
-    def default_code(self, p, o) -> str:
-        return "None"
-
 
 # ----------------------------------------------------------------------------- analysis
 def _lane_type(t: T.Type) -> bool:

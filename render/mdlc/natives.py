@@ -31,7 +31,6 @@ so the Python default applies.
 from __future__ import annotations
 
 import inspect
-import math
 from functools import cache
 from pathlib import Path
 
@@ -583,7 +582,3 @@ def bind_native(overload, curves: dict | None = None):
 
     call.__name__ = f"native_{overload.name}"
     return call
-
-
-def _finite(x) -> bool:
-    return all(math.isfinite(v) for v in np.asarray(x, dtype=np.float64).reshape(-1))

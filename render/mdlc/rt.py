@@ -112,10 +112,6 @@ def cv(x, dtype):
 
 
 # ----------------------------------------------------------------------------- ::state
-def _n(S, L):
-    return L if S is None else len(S)
-
-
 def _rows(a, L):
     a = np.asarray(a, dtype=np.float64)
     return a if a.shape[0] == L else np.broadcast_to(a, (L,) + a.shape[1:])
