@@ -1041,13 +1041,20 @@ def _varying_exit(module, s, loop: bool, under: bool = False) -> bool:
                    if not isinstance(x, A.Break) or u)
     if isinstance(s, (A.While, A.DoWhile, A.For)):
         # only returns inside nested loops leave this loop
-        u = under or (s.cond is not None and _cond_varying(module, s.cond))
+        u = under or _loop_cond_varying(module, s)
         return any(isinstance(x, A.Return) and (u or _under_varying(module, s.body, x))
                    for x in _walk(s.body))
     return False
 
 
-def _under_varying(module, root, target) -> bool:
+def _loop_cond_varying(module, s) -> bool:
+    """Whether a loop's condition varies."""
+    return s.cond is not None and _cond_varying(module, s.cond)
+
+
+def _under_varying(module, root, target, loop_varies=_loop_cond_varying) -> bool:
+    """Whether statement ``target`` inside ``root`` runs under varying control: an ``if``
+    or ``switch`` on a varying value, or a loop for which ``loop_varies``."""
     def go(s, under):
         if s is target:
             return under
@@ -1057,8 +1064,7 @@ def _under_varying(module, root, target) -> bool:
             u = under or _cond_varying(module, s.cond)
             return go(s.then, u) or (s.other is not None and go(s.other, u))
         if isinstance(s, (A.While, A.DoWhile, A.For)):
-            u = under or (s.cond is not None and _cond_varying(module, s.cond))
-            return go(s.body, u)
+            return go(s.body, under or loop_varies(module, s))
         if isinstance(s, A.Switch):
             u = under or _cond_varying(module, s.value)
             return any(go(x, u) for c in s.cases for x in c.stmts)
@@ -1070,33 +1076,14 @@ def _varying_returns(module, body) -> bool:
     """Whether some return of the function happens under varying control (or inside a
     loop whose lanes may leave at different times)."""
     for x in _walk(body):
-        if isinstance(x, A.Return) and _under_varying_or_loop(module, body, x):
+        if isinstance(x, A.Return) and _under_varying(module, body, x, _loop_varying):
             return True
     return False
 
 
-def _under_varying_or_loop(module, root, target) -> bool:
-    def go(s, under):
-        if s is target:
-            return under
-        if isinstance(s, A.Block):
-            return any(go(x, under) for x in s.stmts)
-        if isinstance(s, A.If):
-            u = under or _cond_varying(module, s.cond)
-            return go(s.then, u) or (s.other is not None and go(s.other, u))
-        if isinstance(s, (A.While, A.DoWhile, A.For)):
-            return go(s.body, under or _loop_varying(module, s))
-        if isinstance(s, A.Switch):
-            u = under or _cond_varying(module, s.value)
-            return any(go(x, u) for c in s.cases for x in c.stmts)
-        return False
-    return go(root, False)
-
-
 def _loop_varying(module, s) -> bool:
-    if s.cond is not None and _cond_varying(module, s.cond):
-        return True
-    return _varying_exit(module, s.body, loop=True)
+    """Whether a loop's lanes may leave it at different times."""
+    return _loop_cond_varying(module, s) or _varying_exit(module, s.body, loop=True)
 
 
 def lane_expression_source(mg: ModuleGen, name: str, expr, inputs: dict, order: list,

@@ -28,7 +28,7 @@ def llvm_major(path: str | os.PathLike) -> int | None:
     --------
     >>> llvm_major("/usr/lib/libLLVM-15.so"), llvm_major("libLLVM.so.19.1")
     (15, 19)
-    >>> llvm_major("/opt/llvm/lib/libLLVM.so") is None
+    >>> llvm_major("llvm-19/lib/libLLVM.so") is None  # the folder does not count
     True
     """
     m = re.search(r"libLLVM(?:-(\d+)|\.so\.(\d+))", Path(path).name)
