@@ -174,3 +174,13 @@ def test_the_resource_queries_of_df_in_functions_and_materials(module, tmp_path)
     mat, _ = material_from_call("normalised_lamp()", "queries.mdl", base_dir=tmp_path,
                                 mdl_paths=[module])
     assert np.allclose(mat.surface.emission.intensity, 1000.0 / lamp.power)
+
+
+def test_profile_power_at_the_extremes():
+    """A black profile has power and maximum 0; 1e30 and 1e-300 candela stay finite and
+    exact (2 pi I over the lower hemisphere)."""
+    black = rdf.LightProfile(np.array([0.0, 180.0]), np.array([0.0]), np.zeros((1, 2)))
+    assert (black.power, black.maximum) == (0.0, 0.0)
+    for i in (1e30, 1e-300):
+        p = rdf.LightProfile(np.array([0.0, 90.0]), np.array([0.0]), np.full((1, 2), i))
+        assert np.isfinite(p.power) and p.power == pytest.approx(2.0 * np.pi * i, rel=1e-12)
