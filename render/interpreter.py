@@ -207,9 +207,6 @@ _FS, _FT, _FN, _FWO, _FWI = 0, 3, 6, 9, 12
 _FR = 15
 #: deepest nesting of combiners a program may have (the descent's path is kept in ws)
 MAX_DEPTH = 64
-#: ``sample(..., prepared)`` where the caller has not prepared: a bool, not the literal
-#: ``False`` (which numba would compile the interpreter for once more)
-UNPREPARED = np.bool_(False)
 _NO_KID = -1
 
 
@@ -852,9 +849,7 @@ def sample(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz, u1,
     """``(wi xyz, pdf, weight rgb, lobe)`` of the program rooted at ``root`` (lobe 0:
     failed); directions in its shading frame.  ``prepared``: :func:`eval_pdf` has just
     run on ``ws`` at the same ``wo`` (its :func:`prepare` holds: evaluate changes none
-    of the registers prepare sets).  Callers pass a bool that is not a literal (``UNPREPARED``
-    where they have not prepared): numba compiles the whole interpreter again for every
-    distinct argument type, and a literal ``False`` is a type of its own."""
+    of the registers prepare sets)."""
     if code[root, SIZE] == 1 and code[root, FRAME] == f0:  # one df: its kernel alone
         return leaf_sample(code[root, OP], P, row, code[root, BASE], code[root, FLAGS],
                            ox, oy, oz, u1, u2x, u2y, tables, code[root, TABLE])
@@ -1011,7 +1006,7 @@ def _correction(code, kids, frames, P, tables, row, ws, k, child, which, e0, e1,
     m = points.shape[0]
     for i in range(m):
         s = sample(code, kids, frames, P, tables, row, ws, child, f0, f1, ox, oy, oz,
-                   points[i, 0], points[i, 1], points[i, 2], UNPREPARED)
+                   points[i, 0], points[i, 1], points[i, 2], False)
         if s[7] == 0:
             continue
         # the node's own registers at wo again (the child's pass rewrote shared frames)
@@ -1270,7 +1265,7 @@ def sample_batch(code, kids, frames, P, tables, wo, u1, u2, wi, pdf, weight, lob
     root, nf = code.shape[0] - 1, frames.shape[0]
     for i in range(wo.shape[0]):
         s = sample(code, kids, frames, P, tables, _row(P, i), ws, root, 0, nf, wo[i, 0],
-                   wo[i, 1], wo[i, 2], u1[i], u2[i, 0], u2[i, 1], UNPREPARED)
+                   wo[i, 1], wo[i, 2], u1[i], u2[i, 0], u2[i, 1], False)
         wi[i, 0], wi[i, 1], wi[i, 2], pdf[i] = s[0], s[1], s[2], s[3]
         weight[i, 0], weight[i, 1], weight[i, 2], lobe[i] = s[4], s[5], s[6], s[7]
 
@@ -1369,7 +1364,7 @@ def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):
             s0 = s1 = s2 = 0.0
             for i in range(m):
                 s = sample(code, kids, frames, P, tables, row, ws, lay, 0, nf, gx, gy, gz,
-                           points[i, 0], points[i, 1], points[i, 2], UNPREPARED)
+                           points[i, 0], points[i, 1], points[i, 2], False)
                 if s[7] == 0:
                     continue
                 fx, fy, fz = s[0], s[1], s[2]

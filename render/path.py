@@ -392,11 +392,7 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
     phase0 = 4 * len(tb.obj_flags)  # the media's phase functions' slots
     obj_flags, obj_ior, obj_medium = tb.obj_flags, tb.obj_ior, tb.obj_medium
     obj_opacity, packed, faces = tb.obj_opacity, tb.packed, tb.faces
-    # counters as int64, not literal 0s: a literal argument is a type of its own, and
-    # numba would compile the functions they are passed to once more for it
-    n_park = np.int64(0)
-    n_shadow = np.int64(0)
-    rays = np.int64(0)
+    n_park = n_shadow = rays = 0
     for i in range(n):
         if resume:
             lane = li[i, ID]
@@ -614,9 +610,9 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                 encloses = (flags & ENCLOSES) != 0
             # ---- next-event estimation: the selected light, then every delta light
             u_choice, u_lobe = sample_pair(v1, ph, idx, pair0 + P_CHOICE, kind)
-            prepared = interpreter.UNPREPARED
+            prepared = False
             total = 0.0
-            jd = np.int64(-1)  # not a literal (one compiled next_delta)
+            jd = -1
             ul1 = ul2 = 0.0
             if can_continue:
                 ul1, ul2 = sample_pair(v1, ph, idx, pair0 + P_LIGHT, kind)
@@ -993,7 +989,7 @@ def _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslo
         wix, wiy, wiz, pdf, w0, w1, w2, lobe = interpreter.sample(
             tb.code, tb.kids, tb.frames, params, tb.chat, row, ws, roots[slot],
             tb.frame_lo[slot], tb.frame_hi[slot], wox, woy, woz, ONE_MINUS_EPS, 0.0, 0.0,
-            interpreter.UNPREPARED)
+            False)
         wx = wix * sx + wiy * qx + wiz * nx
         wy = wix * sy + wiy * qy + wiz * ny
         wz = wix * sz + wiy * qz + wiz * nz

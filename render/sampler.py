@@ -78,9 +78,8 @@ SOBOL_TABLE = _byte_tables(_direction_numbers())
 
 #: the pairs of a path: the position in the pixel, the hero channel (media), then
 #: :data:`PAIRS_PER_SEGMENT` per path segment; shadow rays' cutout decisions take theirs
-#: from ``SHADOW_PAIRS`` on (by segment and crossing), apart from the paths' (int64, not
-#: Python ints: the kernels take them as values, not as literals to compile for)
-CAMERA_PAIR, HERO_PAIR, FIRST_SEGMENT_PAIR = np.int64(0), np.int64(1), np.int64(2)
+#: from ``SHADOW_PAIRS`` on (by segment and crossing), apart from the paths'
+CAMERA_PAIR, HERO_PAIR, FIRST_SEGMENT_PAIR = 0, 1, 2
 #: ``[render] sampler``: Owen-scrambled Sobol points, or independent uniforms (a hash of
 #: the same pixel, index and pair: for comparison, and for checks that want them)
 SOBOL, INDEPENDENT = 0, 1

@@ -227,12 +227,12 @@ def mf_film_on(flags, d):
 
 
 @njit
-def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip=True, d=0.0,
-                  f0=1.0, f1=1.0, f2=1.0):
+def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip, d, f0, f1, f2):
     """microfacet sampling from a half vector (local frame) to ``wi``, for an oriented
     lane: with ``vflip`` the half vector was drawn from ``D (n.h)`` and the v-cavities
     flip makes it visible; without, it was drawn from the visible normals already (the
-    Smith variants).  Then the event, reflect or refract.
+    Smith variants).  Then the event, reflect or refract (``d``, ``f0..f2``: the thin
+    film's thickness and ior, :func:`mf_film_event`; ``d = 0``: no film).
 
     Returns ``(ok, wix, wiy, wiz)``.
     """

@@ -85,11 +85,12 @@ def _cells_axis(n, hi, x):
 
 
 @njit
-def _f(T, off, nt, nphi, ti, to, ph, ch):
+def _f(T, off, nt, nphi, ti, to, ph):
+    """The part's trilinear value ``(r, g, b)`` at ``(theta_i, theta_o, phi)``."""
     i0, i1, fi = _axis(nt, _HALF_PI, ti)
     o0, o1, fo = _axis(nt, _HALF_PI, to)
     p0, p1, fp = _axis(nphi, math.pi, ph)
-    v = 0.0
+    r = g = b = 0.0
     for ii in range(2):
         wi = fi if ii else 1.0 - fi
         i = i1 if ii else i0
@@ -101,25 +102,31 @@ def _f(T, off, nt, nphi, ti, to, ph, ch):
                 p = p1 if pp else p0
                 w = wi * wo * wp
                 if w > 0.0:
-                    v += w * T[off + ((i * nt + o) * nphi + p) * 3 + ch]
-    return v
+                    k = off + ((i * nt + o) * nphi + p) * 3
+                    r += w * T[k]
+                    g += w * T[k + 1]
+                    b += w * T[k + 2]
+    return r, g, b
 
 
 @njit
-def _part_albedo(T, off, nt, nphi, to, ch):
-    """A part's albedo at ``theta_o`` (channel ``ch``; ``ch = 3``: the channel mean)."""
+def _part_albedo(T, off, nt, nphi, to):
+    """A part's albedo ``(r, g, b)`` at ``theta_o`` (0 for a part the file lacks)."""
     if off < 0:
-        return 0.0
+        return 0.0, 0.0, 0.0
     cells = max(nt - 1, 1) * max(nphi - 1, 1)
     base = off + nt * nt * nphi * 3 + nt * cells
     o0, o1, fo = _axis(nt, _HALF_PI, to)
-    if ch == 3:
-        a0 = (T[base + o0 * 3] + T[base + o0 * 3 + 1] + T[base + o0 * 3 + 2]) / 3.0
-        a1 = (T[base + o1 * 3] + T[base + o1 * 3 + 1] + T[base + o1 * 3 + 2]) / 3.0
-    else:
-        a0 = T[base + o0 * 3 + ch]
-        a1 = T[base + o1 * 3 + ch]
-    return (1.0 - fo) * a0 + fo * a1
+    a, b = base + o0 * 3, base + o1 * 3
+    return ((1.0 - fo) * T[a] + fo * T[b], (1.0 - fo) * T[a + 1] + fo * T[b + 1],
+            (1.0 - fo) * T[a + 2] + fo * T[b + 2])
+
+
+@njit
+def _part_mean_albedo(T, off, nt, nphi, to):
+    """A part's albedo at ``theta_o``, the mean of its channels."""
+    r, g, b = _part_albedo(T, off, nt, nphi, to)
+    return (r + g + b) / 3.0
 
 
 @njit
@@ -163,12 +170,11 @@ def _eval(T, t, flags, wox, woy, woz, wix, wiy, wiz):
     ph = _dphi(wox, woy, wix, wiy)
     scale = T[t + 4]
     c = abs(wiz) * scale
-    f0 = _f(T, off, nt, nphi, ti, to, ph, 0) * c
-    f1 = _f(T, off, nt, nphi, ti, to, ph, 1) * c
-    f2 = _f(T, off, nt, nphi, ti, to, ph, 2) * c
+    f0, f1, f2 = _f(T, off, nt, nphi, ti, to, ph)
+    f0, f1, f2 = f0 * c, f1 * c, f2 * c
     # pdf: the part, the theta_o node mixture, the cell's probability over its solid angle
-    ar = _part_albedo(T, offr, nt, nphi, to, 3)
-    at = _part_albedo(T, offt, nt, nphi, to, 3)
+    ar = _part_mean_albedo(T, offr, nt, nphi, to)
+    at = _part_mean_albedo(T, offt, nt, nphi, to)
     if not ar + at > 0.0:
         return 0.0, 0.0, 0.0, 0.0
     prob = (at if tr else ar) / (ar + at)
@@ -209,8 +215,8 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
     nt, nphi = int(T[t]), int(T[t + 1])
     offr, offt = _offsets(T, t, flags)
     to = math.acos(min(woz, 1.0))
-    ar = _part_albedo(T, offr, nt, nphi, to, 3)
-    at = _part_albedo(T, offt, nt, nphi, to, 3)
+    ar = _part_mean_albedo(T, offr, nt, nphi, to)
+    at = _part_mean_albedo(T, offt, nt, nphi, to)
     if not ar + at > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     pr = ar / (ar + at)
@@ -272,9 +278,9 @@ def albedo(P, row, b, flags, wox, woy, woz, T, t):
     offr, offt = _offsets(T, t, flags)
     to = math.acos(min(mu, 1.0))
     s = T[t + 4]
-    return (s * (_part_albedo(T, offr, nt, nphi, to, 0) + _part_albedo(T, offt, nt, nphi, to, 0)),
-            s * (_part_albedo(T, offr, nt, nphi, to, 1) + _part_albedo(T, offt, nt, nphi, to, 1)),
-            s * (_part_albedo(T, offr, nt, nphi, to, 2) + _part_albedo(T, offt, nt, nphi, to, 2)))
+    r0, g0, b0 = _part_albedo(T, offr, nt, nphi, to)
+    r1, g1, b1 = _part_albedo(T, offt, nt, nphi, to)
+    return s * (r0 + r1), s * (g0 + g1), s * (b0 + b1)
 
 
 _TABLES: dict = {}

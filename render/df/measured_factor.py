@@ -35,9 +35,9 @@ _TWO_OVER_PI = 2.0 / math.pi
 
 
 @njit
-def _texel(T, t, u, v, ch):
-    """Bilinear lookup of channel ``ch`` at ``(u, v)`` in [0, 1]^2 (texel centres, clamped);
-    the table: ``[width, height, rows from v = 0 up...]`` of RGB texels."""
+def _texel(T, t, u, v):
+    """Bilinear lookup ``(r, g, b)`` at ``(u, v)`` in [0, 1]^2 (texel centres, clamped; at
+    least 0); the table: ``[width, height, rows from v = 0 up...]`` of RGB texels."""
     w, h = int(T[t]), int(T[t + 1])
     x = min(max(u * w - 0.5, 0.0), w - 1.0)
     y = min(max(v * h - 0.5, 0.0), h - 1.0)
@@ -46,11 +46,15 @@ def _texel(T, t, u, v, ch):
     i1, j1 = min(i0 + 1, w - 1), min(j0 + 1, h - 1)
     fx, fy = x - i0, y - j0
     base = t + 2
-    a = T[base + (j0 * w + i0) * 3 + ch]
-    b = T[base + (j0 * w + i1) * 3 + ch]
-    c = T[base + (j1 * w + i0) * 3 + ch]
-    d = T[base + (j1 * w + i1) * 3 + ch]
-    return max((1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * d), 0.0)
+    a = base + (j0 * w + i0) * 3
+    b = base + (j0 * w + i1) * 3
+    c = base + (j1 * w + i0) * 3
+    d = base + (j1 * w + i1) * 3
+    wa, wb = (1.0 - fy) * (1.0 - fx), (1.0 - fy) * fx
+    wc, wd = fy * (1.0 - fx), fy * fx
+    return (max(wa * T[a] + wb * T[b] + wc * T[c] + wd * T[d], 0.0),
+            max(wa * T[a + 1] + wb * T[b + 1] + wc * T[c + 1] + wd * T[d + 1], 0.0),
+            max(wa * T[a + 2] + wb * T[b + 2] + wc * T[c + 2] + wd * T[d + 2], 0.0))
 
 
 @njit
@@ -61,7 +65,7 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
         return 0.0, 0.0, 0.0
     u = math.acos(kh) * _TWO_OVER_PI  # |wi.h| = |wo.h| for the reflection half vector
     v = math.acos(nh) * _TWO_OVER_PI
-    return _texel(T, t, u, v, 0), _texel(T, t, u, v, 1), _texel(T, t, u, v, 2)
+    return _texel(T, t, u, v)
 
 
 def texture_table(texture) -> np.ndarray:

@@ -120,7 +120,7 @@ def _single_sample(wox, woy, woz, u1, u2x, u2y, q):
     sin_t = math.exp(math.log1p(-u2y) / (q + 2.0))
     cos_t = math.sqrt(max(1.0 - sin_t * sin_t, 0.0))
     return mf_sample_dir(0, 1.0, 1.0, wox, woy, woz, sin_t * math.cos(phi),
-                         sin_t * math.sin(phi), cos_t, u1)
+                         sin_t * math.sin(phi), cos_t, u1, True, 0.0, 1.0, 1.0, 1.0)
 
 
 @njit

@@ -96,3 +96,25 @@ def test_plain_numba_cache_runs_the_stale_callee(tmp_path):
     (tree / "render" / "_probe_callee.py").write_text(CALLEE.format(offset="5.0"))
     stale = _run(tmp_path, tree, env)
     assert stale["hits"] == 1 and stale["value"] == 4.0
+
+
+def test_a_kernel_compiles_once_whatever_literal_values_it_is_called_with():
+    """numba types ``f(x, 0)`` and ``f(x, False)`` with literal types and compiles ``f``
+    once per value; render.jit's dispatcher compiles once per argument types (the cold
+    compile's specialisations: 355 -> 305, measured in docs/render.md#speed)."""
+    import numba
+
+    from render.jit import njit
+
+    @njit
+    def scaled(x, k, flag):
+        return x * k + (1.0 if flag else 0.0)
+
+    @njit
+    def caller(x):
+        return scaled(x, 0, False) + scaled(x, 2, True) + scaled(x, 3, False)
+
+    assert caller(1.5) == 0.0 + 4.0 + 4.5
+    assert scaled.signatures == [(numba.float64, numba.int64, numba.boolean)]
+    assert scaled(1.5, 2, True) == 4.0  # called from Python: the same specialisation
+    assert len(scaled.signatures) == 1
