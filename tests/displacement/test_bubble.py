@@ -195,7 +195,7 @@ def test_registry_and_types():
         displace_with_bubble((1.0, 0.0, 0.0), get_bubble_args(0.25, 0.25))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(
     st.floats(0.01, 0.5),
     st.floats(-1.0, 1.0),

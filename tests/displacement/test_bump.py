@@ -289,7 +289,7 @@ def test_bump_normal_below_horizon_is_bent_back_by_the_rule():
     assert np.allclose(bump_normal(s, t, horizon=None)[0], [0.8, 0, -0.6])
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(
     st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)),
     st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)),
@@ -320,7 +320,7 @@ def test_clamp_to_horizon_rejects_bad_min_cos():
         clamp_to_horizon(np.array([[0, 0, 1.0]]), np.array([[0, 0, 1.0]]), 1.0)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.05, 1)))
 def test_encode_decode_round_trip(n):
     n = _unit(np.array(n))

@@ -73,7 +73,7 @@ def test_in_frustum_margin():
     assert cam.in_frustum(p, margin_px=3.0)[0]
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(-0.49, 0.49), st.floats(-0.49, 0.49), st.floats(0.5, 50.0),
        st.floats(10.0, 150.0))
 def test_raster_scale_bounds_the_projection_jacobian(a, b, depth, fov):
@@ -96,7 +96,7 @@ def test_raster_scale_bounds_the_projection_jacobian(a, b, depth, fov):
     assert ratio.max() >= 0.9 * s          # and it is attained (largest singular value)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(0.0, 64.0), st.floats(0.0, 48.0), st.floats(0.1, 100.0),
        st.booleans())
 def test_rays_round_trip(px, py, t, ortho):

@@ -178,7 +178,7 @@ def test_uniform_dicing_misses_creases():
 SLACK = 1.25
 
 
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=12, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.floats(0.0, 0.08), min_size=3, max_size=3),
        st.lists(st.integers(0, 3), min_size=3, max_size=3),
        st.lists(st.integers(0, 3), min_size=3, max_size=3),

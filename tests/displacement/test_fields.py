@@ -70,7 +70,7 @@ def test_repeat_knots():
         repeat_knots(t, 0.0)
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(st.lists(st.floats(0, 1), min_size=1, max_size=6), st.floats(0.01, 50))
 def test_property_repeat_knots_are_where_frac_restarts_a_knot(t, repeat):
     t = np.unique(np.concatenate([[0.0], t, [1.0]]))

@@ -174,7 +174,7 @@ def test_scale_component_and_registry():
     assert FIELDS["displace_with_profile"] is displace_with_profile
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(
     arrays(np.float64, st.integers(2, 8).map(lambda n: (n, 2)), elements=st.floats(-10, 10)),
     st.floats(0.001, 1000.0),

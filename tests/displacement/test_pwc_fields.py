@@ -252,7 +252,7 @@ def test_registry():
 CURVES = [SEGMENTS, ARC, CORINTHIAN, DORIC]
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(arrays(np.float64, (10, 2), elements=st.floats(-1e6, 1e6)), st.sampled_from(CURVES),
        st.sampled_from(["along_u", "along_v"]), st.sampled_from([None, 1.0, 3.0, 1000.0]))
 def test_property_finite(uv, curve, direction, repeat):

@@ -417,7 +417,7 @@ def test_revolve_agrees_with_pwc_angular_displace():
     assert revolution_distance(probes, curve).max() <= tol + 1e-9
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 @given(
     width=st.floats(0.05, 1.0),
     height=st.floats(0.05, 1.0),
@@ -433,7 +433,7 @@ def test_revolved_rectangles_are_exact_prisms(width, height, offset, n):
     assert solid.volume() == pytest.approx(expected, rel=1e-11)
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15)
 @given(tol=st.floats(1e-4, 0.3), offset=st.floats(0.0, 1.0))
 def test_revolve_volume_within_bound_for_any_tolerance(tol, offset):
     curve = load("ovolo")

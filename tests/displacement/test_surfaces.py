@@ -192,14 +192,14 @@ def test_spindle_torus_frame_is_defined():
     assert_frame(s)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(arrays(np.float64, (16, 2), elements=st.floats(-1e6, 1e6)))
 def test_property_frames_everywhere(uv):
     for surface in PARAMETRIC:
         assert_frame(surface.state_at_uv(uv), atol=1e-9)
 
 
-@settings(max_examples=30, deadline=None)
+@settings(max_examples=30)
 @given(st.sampled_from([0.0, 1.0, 0.5, 1e-300, -1e-300, 1 - 1e-16, 1e-16]),
        st.sampled_from([0.0, 1.0, 0.5, 1e-300, 1 - 1e-16, 1e-16, -0.0]))
 def test_property_extreme_uv(u, v):

@@ -283,7 +283,7 @@ def test_lookup_rejects_non_finite_uv_and_bad_shapes():
         Texture(np.zeros((2, 2, 2, 2)))
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(
     st.lists(st.tuples(st.floats(-50, 50), st.floats(-50, 50)), min_size=1, max_size=20),
     st.integers(-5, 5),

@@ -137,7 +137,7 @@ FIELDS_UNDER_TEST = [
 ]
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(arrays(np.float64, (10, 2), elements=st.floats(-1e6, 1e6)))
 def test_property_finite_on_any_uv(uv):
     for surface in (SQUARE, UVSphere(), Cylinder()):

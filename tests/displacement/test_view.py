@@ -129,7 +129,7 @@ class TestGridMaterial:
             with pytest.raises(ValueError, match="cell_count"):
                 view.near_grid_value(np.zeros(1), bad)
 
-    @settings(max_examples=200, deadline=None)
+    @settings(max_examples=200)
     @given(f=st.floats(-50.0, 50.0, allow_nan=False),
            count=st.floats(0.5, 200.0, allow_nan=False))
     def test_near_grid_value_is_distance_to_nearest_line(self, f, count):

@@ -127,7 +127,7 @@ def test_uv_zero_and_one_agree():
     np.testing.assert_array_equal(a, b)                      # frac(1) = 0
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(
     arrays(np.float64, (8, 2), elements=st.floats(-1e9, 1e9)),
     st.tuples(st.floats(0, 1e4), st.floats(0, 1e4)),

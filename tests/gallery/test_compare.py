@@ -12,7 +12,7 @@ from gallery import compare
 from gallery.figures import figures
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(st.integers(1, 4), st.integers(1, 5), st.integers(1, 5),
        st.data())
 def test_downsample_is_the_mean_of_each_block(factor, bh, bw, data):

@@ -32,7 +32,7 @@ def test_srgb_slope_at_the_extremes():
     assert slope.tolist()[5:] == [0.0, 0.0, 0.0]  # clamped, or not a number: no grain
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50)
 @given(arrays(np.float64, (5, 2, 3, 1), elements=st.floats(0, 10)))
 def test_batches_give_the_mean_and_its_standard_error(images):
     batches = references.Batches((2, 3, 1))

@@ -383,7 +383,7 @@ def _expressions(literals, operators, max_leaves=12):
 
 
 @given(_expressions(_float_literals, ["+", "-", "*", "/"]))
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 def test_float_expressions_evaluate_like_python(expression):
     try:
         expected = eval(expression)  # noqa: S307 - generated arithmetic only
@@ -395,7 +395,7 @@ def test_float_expressions_evaluate_like_python(expression):
 
 
 @given(_expressions(_int_literals, ["+", "-", "*"], max_leaves=4))
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 def test_int_expressions_evaluate_like_python(expression):
     value = const(f"mdl 1.6;\nconst int x = {expression};")
     expected = eval(expression)  # noqa: S307 - generated arithmetic only
@@ -435,7 +435,7 @@ def _mdl_expressions():
 
 
 @given(_mdl_expressions())
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
 def test_printed_expressions_parse_back_to_the_same_tree(text):
     tree = parse_expression(Source("e", text))
     printed = format_expression(tree)
@@ -455,7 +455,7 @@ _STATEMENTS = st.sampled_from([
 
 
 @given(st.lists(_STATEMENTS, max_size=8))
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 def test_printed_modules_parse_back_to_the_same_tree(body):
     text = ("mdl 1.6;\nimport ::math::*;\nexport int f(int a, int b = 2) [[ anno::unused() ]]\n"
             "{\n    int x = 0;\n    int[3] arr;\n" + "\n".join("    " + s for s in body)
@@ -488,7 +488,7 @@ _TOKEN_SOUP = (
 
 
 @given(st.text(max_size=200) | st.binary(max_size=200).map(lambda b: b.decode("latin-1")))
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 def test_garbage_parses_or_raises_mdl_error(text):
     try:
         load(text)
@@ -498,7 +498,7 @@ def test_garbage_parses_or_raises_mdl_error(text):
 
 
 @given(st.lists(st.sampled_from(_TOKEN_SOUP), max_size=60).map(" ".join))
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=500)
 def test_token_soup_parses_or_raises_mdl_error(text):
     try:
         load("mdl 1.6;\n" + text)
@@ -508,7 +508,7 @@ def test_token_soup_parses_or_raises_mdl_error(text):
 
 
 @given(st.integers(min_value=1, max_value=3000))
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20)
 def test_deep_nesting_raises_mdl_error_not_recursion_error(depth):
     text = "mdl 1.6;\nconst float x = " + "(" * depth + "1.0" + ")" * depth + ";"
     try:

@@ -215,7 +215,7 @@ def test_one_hundred_thousand_points():
 
 
 @given(valid_lists())
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 def test_generated_lists_compile_to_finite_curves(text):
     c, _ = compile_valid(text)
     for name in ("t", "pt", "center", "radius", "start_angle", "end_angle"):

@@ -131,7 +131,7 @@ def _dense_length(c, n=400_001) -> float:
 
 
 @given(valid_lists())
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 def test_properties_of_generated_curves(text):
     c, _ = compile_valid(text)
     assert np.all(np.diff(c.t) > 0)

@@ -569,20 +569,20 @@ _VOCABULARY = ["glossy", "waves", "grid", "bubble", "raise", "radial_pwc", "doub
                ".surface", "[", "]", "math::PI"]
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=400, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.sampled_from(_VOCABULARY), max_size=30))
 def test_token_soup_raises_only_material_expr_error(parts):
     text = " ".join(parts)
     _only_expr_errors(text)
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
 @given(st.text(max_size=60))
 def test_random_text_raises_only_material_expr_error(text):
     _only_expr_errors(text)
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from([t for _, t in CAPTIONS] + OTHER_CALLS), st.integers(0, 10_000),
        st.integers(0, 3), st.sampled_from(list("(),:-.0123456789aez_\" ")))
 def test_mutated_captions_raise_only_material_expr_error(text, position, operation, char):

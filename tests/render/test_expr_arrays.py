@@ -249,14 +249,14 @@ def _only_expr_errors(text: str) -> None:
         assert e.line <= len(lines) and e.col <= len(lines[e.line - 1]) + 1
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=400, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.sampled_from(_VOCABULARY), max_size=30))
 def test_array_token_soup_raises_only_material_expr_error(parts):
     _only_expr_errors("".join(parts))
     _only_expr_errors(" ".join(parts))
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=400, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from([LISTING_6_12, LISTING_6_13_FIGURE_6_16, PHONGLIKE_PLASTIC,
                         LISTING_6_12_PRINTED]),
        st.integers(0, 10_000), st.integers(0, 3), st.sampled_from(list("[](),:-.0123ae_\" ")))

@@ -36,7 +36,7 @@ coord = st.floats(-1e6, 1e6, allow_nan=False)
 unit = st.floats(-1.0, 1.0, allow_nan=False)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(p=st.tuples(coord, coord, coord), n=st.tuples(unit, unit, unit),
        mode=st.sampled_from(MODES))
 def test_probabilities_sum_to_one_anywhere(p, n, mode):
@@ -269,7 +269,7 @@ def _row(c, r, axis, cos, i):
 vec = st.tuples(*[st.floats(-10, 10, allow_nan=False)] * 3)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(ca=vec, cb=vec, ra=st.floats(0, 5), rb=st.floats(0, 5), xa=vec, xb=vec,
        cos_a=st.floats(-1, 1), cos_b=st.floats(-1, 1))
 def test_a_node_bounds_both_children(ca, cb, ra, rb, xa, xb, cos_a, cos_b):

@@ -390,7 +390,7 @@ def test_shade_zero_lanes():
     assert sh.normal.shape == (0, 3) and sh.cutout_opacity.shape == (0,)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)), min_size=1, max_size=20),
        st.floats(-1e4, 1e4), st.floats(0.01, 100.0))
 def test_bumped_shading_is_always_unit_and_above_the_horizon(uvs, bump_scale, tiles):

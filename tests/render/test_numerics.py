@@ -71,7 +71,7 @@ def test_fresnel_value_by_hand():
     assert F[0] == pytest.approx(0.5 * (0.588360**2 + 0.263336**2), abs=2e-6)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300)
 @given(st.floats(1e-4, 1.0), st.floats(0.2, 5.0))
 def test_fresnel_is_symmetric_across_the_interface(c, eta):
     # Stokes: the reflectance seen from inside at the transmitted angle is the same.

@@ -35,7 +35,7 @@ def batches(draw):
     return npix, out
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(batches())
 def test_merged_patches_are_the_samples_summed_in_order(case):
     """The film's sums are the samples' sums in the order they were added, per pixel
@@ -90,7 +90,7 @@ def test_a_patch_outside_the_film_is_refused():
     assert patch.nbytes == 2 * (3 * 8 + 8 + 8)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(
     st.integers(1, 4096),
     st.integers(1, 2048),

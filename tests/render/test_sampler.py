@@ -36,7 +36,7 @@ def test_the_tables_are_sobols_sequence():
         assert _unscrambled(i)[1] == y / 2**32
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(pixel=st.integers(0, 1 << 40), pair=st.integers(0, 1 << 41),
        seed=st.integers(0, 1 << 62), m=st.integers(0, 10), block=st.integers(0, 3))
 def test_every_aligned_power_of_two_block_is_a_net(pixel, pair, seed, m, block):

@@ -53,7 +53,7 @@ def test_patching_adds_a_render_table_where_there_is_none():
 
 @given(st.integers(1, 4096), st.floats(1e-6, 1e6), st.sampled_from(["exact", "float32",
                                                                     "polyline"]))
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 def test_patched_values_read_back_exactly(spp, tolerance, curves):
     s = scene(SCENE, {"spp": spp, "curve_tolerance": tolerance, "curves": curves},
               {1: {"dicing_rate": tolerance}})

@@ -333,7 +333,7 @@ def test_kernel_pdf_is_the_table_cell_by_cell_and_integrates_to_one(elevation, k
 _SKIES = {}
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(
     st.sampled_from(range(len(KERNEL_SKIES))),
     st.floats(-1.0, 1.0), st.floats(-np.pi, np.pi),

@@ -136,7 +136,7 @@ def test_degenerate_cone_and_bad_shapes():
         warp.square_to_uniform_sphere_pdf(np.zeros((2, 2)))
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(st.floats(0.0, ONE), st.floats(0.0, ONE))
 def test_concentric_round_trip_property(a, b):
     u = np.array([[a, b]])

@@ -123,7 +123,7 @@ def test_peak_memory_sees_what_a_block_allocates():
 
 # -- the Pareto front ----------------------------------------------------------------------
 @given(st.lists(st.tuples(st.floats(0.01, 100), st.floats(0, 1)), min_size=1, max_size=30))
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=80)
 def test_the_pareto_front_is_exactly_the_undominated_points(points):
     front = pareto_front(points)
     assert any(front)

@@ -84,7 +84,7 @@ def test_pdf_normalised_and_furnace(case, wo):
         assert np.all(np.abs(mean - 1.0) <= 0.02), mean
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(0.01, 1.0), st.floats(0.01, 1.0), st.floats(-0.2, 0.2), st.floats(1.2, 2.0),
        st.floats(0.0, 180.0), st.floats(0.0, 360.0))
 def test_white_fibre_sampling_weights_are_one(v, s, alpha, ior, th, ph):

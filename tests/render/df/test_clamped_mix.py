@@ -155,7 +155,7 @@ def test_edf_overload():
 WEIGHTS = st.lists(st.floats(-2.0, 3.0, allow_nan=False), min_size=1, max_size=5)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(WEIGHTS)
 def test_clamped_weights_properties(weights):
     m = clamped_mix([bsdf_component(w, D()) for w in weights])

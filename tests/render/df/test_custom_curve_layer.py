@@ -300,7 +300,7 @@ CURVE_SWEEP = dict(
 )
 
 
-@settings(max_examples=12, deadline=None, derandomize=True)
+@settings(max_examples=12, derandomize=True)
 @given(**CURVE_SWEEP)
 def test_no_gain_sweep(r0, r90, f82, exponent, weight, roughness, layer, base, base_roughness,
                        theta):

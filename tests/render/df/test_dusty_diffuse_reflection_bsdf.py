@@ -149,7 +149,7 @@ def test_albedo_table_against_quadrature():
             assert b.albedo(wo[None])[0, 0] == pytest.approx(float(q), abs=TAB), (tint, th)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 180.0),
        st.floats(0.0, 360.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0))
 def test_properties(t0, t1, t2, th, ph, u0, u1, u2):

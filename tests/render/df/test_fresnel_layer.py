@@ -256,7 +256,7 @@ FRESNEL_SWEEP = dict(
 )
 
 
-@settings(max_examples=12, deadline=None, derandomize=True)
+@settings(max_examples=12, derandomize=True)
 @given(**FRESNEL_SWEEP)
 def test_no_gain_sweep(weight, ior, roughness, layer, base, base_roughness, theta):
     """White furnace <= 1 for rough, nested and factored coats over mirror,

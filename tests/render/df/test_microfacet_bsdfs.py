@@ -183,7 +183,7 @@ def test_erfinv_inverts_erf():
     assert np.max(np.abs(np.array([math.erf(v) for v in y]) - x)) < 2e-15
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.sampled_from(list(DFS)), st.floats(0.0, 2.0), st.floats(0.0, 2.0),
        st.floats(0.0, 180.0), st.floats(0.0, 360.0), st.floats(0.0, 1.0),
        st.sampled_from(["scatter_reflect", RT, TR]), st.floats(1.0, 3.0))

@@ -165,7 +165,7 @@ def test_multiscatter_defaults():
         assert np.all(m <= 1.0 + 4 * se) and np.all(m >= 0.85)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 180.0),
        st.floats(0.0, 360.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0))
 def test_properties(r, t, ms, th, ph, u0, u1, u2):

@@ -201,7 +201,7 @@ def test_edf_overloads():
     assert np.all(np.isfinite(m.eval(wo))) and np.all(m.eval(wo) >= 0)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(0.0, 180.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0),
        st.floats(1.0, 2.5), st.floats(0.0, 5.0))
 def test_factors_never_gain_energy(theta, r, tr, g, ior, k):

@@ -231,7 +231,7 @@ def test_color_edf_mix():
 # --- properties -------------------------------------------------------------------------------
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(st.floats(-2.0, 5.0, allow_nan=False), min_size=1, max_size=5))
 def test_normalized_weights_properties(weights):
     m = normalized_mix([bsdf_component(w, D()) for w in weights])

@@ -346,7 +346,7 @@ def test_films_on_curves_parse_and_bind():
         assert not np.allclose(b.albedo(wo), p.albedo(wo), atol=1e-4)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(0.0, 1200.0), st.floats(1.0, 2.5), st.floats(0.0, 1.0), st.floats(0.0, 1.0),
        st.floats(0.0, 8.0), st.floats(0.0, 1.0), st.floats(0.0, 89.9), st.booleans())
 def test_curve_film_properties(d, nf, r0, r90, p, w, theta, factor):

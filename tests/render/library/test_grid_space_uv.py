@@ -75,7 +75,7 @@ def test_grid_color_varying_arguments_and_other_texture_space():
     assert np.all(in_grid_line(s, (4.0, 4.0), (0.0, 0.0), texture_space=1))
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100)
 @given(st.floats(-1e6, 1e6), st.floats(0.5, 500.0))
 def test_grid_lines_contain_every_multiple(k, count):
     f = np.array([np.floor(k) / count])

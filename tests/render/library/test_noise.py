@@ -166,7 +166,7 @@ def test_bad_points_raise(bad, match):
         perlin_noise(bad)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(st.lists(st.floats(-1e12, 1e12, allow_nan=False), min_size=3, max_size=3))
 def test_noise_is_finite_and_bounded(point):
     n = perlin_noise(np.array(point))

@@ -217,7 +217,7 @@ def test_checkerboard_by_hand():
         [0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.floats(-20, 20), st.floats(-20, 20))
 def test_checkerboard_mirrors_at_the_axes_and_alternates(u, v):
     m = MATERIALS["checkerboard"]()
@@ -281,7 +281,7 @@ def test_stripe_by_hand_and_degenerate_intervals():
             False]
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(st.floats(-50, 50), st.floats(0.01, 5.0), st.floats(0.0, 1.0))
 def test_stripe_is_the_distance_to_the_nearest_multiple(f, interval, fraction):
     thickness = fraction * interval

@@ -529,7 +529,7 @@ def test_bent_normal_by_hand():
         chapter8.bent_normal(math.inf)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40)
 @given(st.floats(-1e6, 1e6), st.floats(-50, 50), st.floats(-50, 50))
 def test_bent_normal_is_unit_and_finite(bend, u, v):
     s = UVSphere().state_at_uv(np.array([[u, v], [0.3, 0.0], [0.3, 1.0]]))
