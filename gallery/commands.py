@@ -151,10 +151,9 @@ def _rendered(args, figs):
         return args.resolution or fig.resolution
 
     if not _on_cluster(args):
-        if not args.quiet:
-            from render.jit import notice_first_compile
+        from render.precompile import before_first_render
 
-            notice_first_compile("pwc gallery")
+        before_first_render("pwc gallery", args.quiet)
         for fig in figs:
             yield fig, render_figure(fig, args.spp, args.seed, resolution=size(fig),
                                      progress=_progress(args), denoise=args.denoise,

@@ -64,13 +64,17 @@ def cache_dir() -> Path:
     return base / f"numba-{numba.__version__}-{SOURCE_KEY}"
 
 
-def notice_first_compile(prog: str) -> None:
-    """One line on stderr before the first render on a machine: the kernels compile then
-    (a cold cache is a kernel folder with no index files yet), which takes a while."""
+def notice_first_compile(prog: str, quiet: bool = False) -> bool:
+    """Before the first render on a machine (a cold cache: a kernel folder with no index
+    files yet), say on stderr (unless ``quiet``) that the kernels compile now, which
+    takes a while.  Returns whether the cache is cold."""
     folder = cache_dir()
-    if not (folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None):
-        print(f"{prog}: compiling render kernels, once per machine (a minute or two; "
+    if folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None:
+        return False
+    if not quiet:
+        print(f"{prog}: compiling render kernels, once per machine (about a minute; "
               f"cached in {folder})", file=sys.stderr)
+    return True
 
 
 class _RenderCacheLocator(_CacheLocator):

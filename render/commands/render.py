@@ -151,10 +151,9 @@ def run(args) -> int:
             import pyoidn  # noqa: F401 - raises ImportError (reported below) when missing
         # an image too large for memory is refused before the scene is diced
         check_film_memory(scene.camera.width, scene.camera.height, aovs, denoise)
-        if not args.quiet:
-            from render.jit import notice_first_compile
+        from render.precompile import before_first_render
 
-            notice_first_compile("pwc render")
+        before_first_render("pwc render", args.quiet)
         # a bar redrawn with carriage returns only on a terminal, not into a log
         progress = not args.quiet and sys.stderr.isatty()
         if args.scheduler or args.workers:

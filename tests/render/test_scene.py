@@ -512,12 +512,14 @@ def test_first_compile_notice_only_on_a_cold_cache(tmp_path, monkeypatch, capsys
     from render.jit import cache_dir, notice_first_compile
 
     monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
-    notice_first_compile("pwc render")
+    assert notice_first_compile("pwc render") is True
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "compiling render kernels, once per machine" in err
+    assert notice_first_compile("pwc render", quiet=True) is True
+    assert capsys.readouterr().err == ""
     (cache_dir() / "compiled").mkdir(parents=True)
     (cache_dir() / "compiled" / "kernel-12.py311.nbi").write_bytes(b"")
-    notice_first_compile("pwc render")
+    assert notice_first_compile("pwc render") is False
     assert capsys.readouterr().err == ""
 
 

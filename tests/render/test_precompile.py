@@ -1,0 +1,56 @@
+"""The df kernels a second process compiles ahead (:mod:`render.precompile`) are the very
+ones the path kernel calls: after :func:`~render.precompile.compile_df_kernels` has run
+in one process, a render in another loads every df kernel it calls from the cache and
+compiles none of them again (a kernel called with other argument types than
+:data:`~render.precompile.KERNEL_ARGS` would be compiled again)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from repo import checkout_env
+
+RENDER = textwrap.dedent("""\
+    import dataclasses, json
+    from render.integrator import Integrator
+    from render.library.resources import bundled_scenes
+    from render.precompile import df_kernels
+    from render.scene import load_scene
+    scene = load_scene(bundled_scenes() / "fig_14_28.toml")
+    scene.settings.width = scene.settings.height = 8
+    scene.camera = dataclasses.replace(scene.camera, width=8, height=8)
+    Integrator(scene, scene.build()).render(spp=1, progress=False, threads=1)
+    print(json.dumps([{"name": k.py_func.__module__ + "." + k.__name__,
+                       "loaded": sum(k.stats.cache_hits.values()),
+                       "compiled": sum(k.stats.cache_misses.values())}
+                      for k in df_kernels()]))
+""")
+
+
+def _run(code, env):
+    r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                       text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def test_a_render_loads_every_df_kernel_compiled_ahead_and_compiles_none(tmp_path,
+                                                                          monkeypatch):
+    from render.precompile import compile_df_kernels_aside
+
+    monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
+    aside = compile_df_kernels_aside()  # the second process, here first and to its end
+    if aside is None:
+        assert len(os.sched_getaffinity(0)) < 2
+        pytest.skip("one core: no second process is started")
+    assert aside.wait(timeout=900) == 0
+    env = checkout_env({**os.environ, "PWC_CACHE_DIR": str(tmp_path)})
+    rows = json.loads(_run(RENDER, env).strip().splitlines()[-1])
+    assert len(rows) > 80  # every df module's kernels the interpreter dispatches to
+    assert [x["name"] for x in rows if x["compiled"]] == []
+    assert sum(x["loaded"] > 0 for x in rows) > 60  # the render's own, from the cache
