@@ -62,10 +62,18 @@ def compile_df_kernels() -> None:
         kernel.compile(kernel_signature(kernel))
 
 
+def cores() -> int:
+    """The cores this process may run on (all the machine's where that is not known)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
 def compile_df_kernels_aside() -> subprocess.Popen | None:
     """Start :func:`compile_df_kernels` in a second process (None on one core).  It runs
     to its end whatever this process does; its output is discarded."""
-    if len(os.sched_getaffinity(0)) < 2:
+    if cores() < 2:
         return None
     here = str(Path(__file__).resolve().parents[1])  # this checkout's render package
     path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
