@@ -27,7 +27,7 @@ from pathlib import Path
 from numba import types
 
 __all__ = ["KERNEL_ARGS", "df_kernels", "kernel_signature", "compile_df_kernels",
-           "compile_df_kernels_aside", "before_first_render"]
+           "compile_df_kernels_aside", "before_first_render", "cores"]
 
 _INT = types.int64
 #: the types the interpreter passes a df kernel, by parameter name; every other
