@@ -150,10 +150,10 @@ def _rendered(args, figs):
     def size(fig):
         return args.resolution or fig.resolution
 
-    if not _on_cluster(args):
-        from render.precompile import before_first_render
+    from render.precompile import notice_first_compile
 
-        before_first_render("pwc gallery", args.quiet)
+    notice_first_compile("pwc gallery", args.quiet)
+    if not _on_cluster(args):
         for fig in figs:
             yield fig, render_figure(fig, args.spp, args.seed, resolution=size(fig),
                                      progress=_progress(args), denoise=args.denoise,

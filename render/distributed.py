@@ -263,14 +263,15 @@ def _scene_plugin_class():
                         )
                     import pickle
 
-                    from render.integrator import Integrator
+                    from render.precompile import compiled_integrator
 
                     t0 = _time.perf_counter()
                     scene = pickle.loads(self.payload)
                     t1 = _time.perf_counter()
                     geometry = scene.build()
                     self.geometry_s = _time.perf_counter() - t1
-                    self.integrator = Integrator(scene, geometry, self.aovs)
+                    # on a cold cache one worker of a host at a time
+                    self.integrator = compiled_integrator(scene, geometry, self.aovs)
                     self.build_s = _time.perf_counter() - t0
                     self.builds += 1
                     self.geometry_stats = geometry.stats

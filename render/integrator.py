@@ -927,6 +927,7 @@ def render(
     Film
         ``film.stats`` holds time, samples per second, rays and time inside Embree.
     """
+    from render.precompile import compiled_integrator, notice_first_compile
     from render.scene import Scene, load_scene
 
     if not isinstance(scene, Scene):
@@ -938,7 +939,8 @@ def render(
     denoise = denoise or bool(getattr(scene.settings, "denoise", False))  # or denoise = true
     if denoise:
         aov_list = list(dict.fromkeys(aov_list + ["albedo", "normal"]))
-    integ = Integrator(scene, geometry, aov_list)
+    notice_first_compile("pwc", quiet=not progress)
+    integ = compiled_integrator(scene, geometry, aov_list)
     film = integ.render(spp=spp, time_budget=time, seed=seed, progress=progress, threads=threads)
     film.stats["build_s"] = build_s
     film.stats["geometry"] = geometry.stats

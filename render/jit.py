@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import hashlib
 import os
-import sys
 from pathlib import Path
 
 import numba
@@ -33,7 +32,7 @@ from numba.core import types
 from numba.core.caching import CacheImpl, _CacheLocator
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["njit", "cache_dir", "notice_first_compile", "SOURCE_KEY"]
+__all__ = ["njit", "cache_dir", "SOURCE_KEY"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -62,19 +61,6 @@ def cache_dir() -> Path:
         xdg = os.environ.get("XDG_CACHE_HOME")
         base = (Path(xdg) if xdg else Path.home() / ".cache") / "pwc-workbench"
     return base / f"numba-{numba.__version__}-{SOURCE_KEY}"
-
-
-def notice_first_compile(prog: str, quiet: bool = False) -> bool:
-    """Before the first render on a machine (a cold cache: a kernel folder with no index
-    files yet), say on stderr (unless ``quiet``) that the kernels compile now, which
-    takes a while.  Returns whether the cache is cold."""
-    folder = cache_dir()
-    if folder.is_dir() and next(folder.rglob("*.nbi"), None) is not None:
-        return False
-    if not quiet:
-        print(f"{prog}: compiling render kernels, once per machine (about a minute; "
-              f"cached in {folder})", file=sys.stderr)
-    return True
 
 
 class _RenderCacheLocator(_CacheLocator):

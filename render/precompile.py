@@ -14,10 +14,16 @@ reaches the kernels from its start, and they meet in between.
 The arguments follow one convention, by parameter name (:data:`KERNEL_ARGS`); a test
 checks that every df kernel the path kernel calls is the one compiled here.  Whatever
 the second process has not finished, the first compiles itself: it is never waited for.
+
+Processes of one machine that render at once on a cold cache (the workers of a local
+Dask cluster, ``pwc gallery`` on Dask) take turns at the first compile
+(:func:`first_compile`, a lock file in the cache): one compiles, with its second
+process, and the others load what it compiled instead of compiling it again each.
 """
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 import os
 import subprocess
@@ -27,7 +33,8 @@ from pathlib import Path
 from numba import types
 
 __all__ = ["KERNEL_ARGS", "df_kernels", "kernel_signature", "compile_df_kernels",
-           "compile_df_kernels_aside", "before_first_render", "cores"]
+           "compile_df_kernels_aside", "cores", "kernels_ready", "notice_first_compile",
+           "first_compile", "compiled_integrator", "READY"]
 
 _INT = types.int64
 #: the types the interpreter passes a df kernel, by parameter name; every other
@@ -83,10 +90,90 @@ def compile_df_kernels_aside() -> subprocess.Popen | None:
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
-def before_first_render(prog: str, quiet: bool = False) -> None:
-    """What a command does before it renders: on a cold kernel cache, say so (unless
-    ``quiet``, :func:`render.jit.notice_first_compile`) and compile the df kernels aside."""
-    from render.jit import notice_first_compile
+#: the file in the cache folder that says a render has traced samples with its kernels
+READY = "ready"
 
-    if notice_first_compile(prog, quiet):
+
+def kernels_ready() -> bool:
+    """Whether this tree's kernels are compiled on this machine: a render has traced its
+    first samples with them (:func:`render.jit.cache_dir` holds :data:`READY`).  A
+    kernel that only some scenes call may still compile on its first use."""
+    from render.jit import cache_dir
+
+    return (cache_dir() / READY).is_file()
+
+
+_said: set = set()  # the cache folders this process has said it compiles into
+
+
+def notice_first_compile(prog: str, quiet: bool = False) -> bool:
+    """Before a render on a cold cache (not :func:`kernels_ready`), say on stderr, once
+    per process and unless ``quiet``, that the kernels compile now.  Returns whether the
+    cache is cold."""
+    from render.jit import cache_dir
+
+    if kernels_ready():
+        return False
+    folder = cache_dir()
+    if not quiet and folder not in _said:
+        _said.add(folder)
+        print(f"{prog}: compiling render kernels, once per machine (about a minute; "
+              f"cached in {folder})", file=sys.stderr)
+    return True
+
+
+@contextlib.contextmanager
+def first_compile():
+    """Around the first kernel calls of a render (:func:`compiled_integrator`): on a
+    cold cache, take this machine's turn to compile (a lock file in the cache folder;
+    others wait for it, then load what it compiled), start
+    :func:`compile_df_kernels_aside`, and when the block ends without an error write
+    :data:`READY`.  Yields whether this block compiles; on a ready cache it neither
+    waits nor compiles.  Without ``fcntl`` (not POSIX) there is no lock, and processes
+    compile alike."""
+    if kernels_ready():
+        yield False
+        return
+    from render.jit import cache_dir
+
+    folder = cache_dir()
+    with _machine_lock(folder):
+        if kernels_ready():  # compiled by the process this one waited for
+            yield False
+            return
         compile_df_kernels_aside()
+        yield True
+        (folder / READY).touch()
+
+
+def compiled_integrator(scene, geometry, aovs=()):
+    """The scene's :class:`~render.integrator.Integrator` with the kernels its render
+    calls compiled: on a cold cache in this machine's turn (:func:`first_compile`), by
+    tracing a few samples, so the turn ends before the render does."""
+    import numpy as np
+
+    from render.integrator import Integrator
+
+    with first_compile() as compiling:
+        integ = Integrator(scene, geometry, aovs)
+        if compiling:
+            n = min(64, integ.camera.width * integ.camera.height)
+            integ.trace(np.arange(n), np.zeros(n, np.int64), 0)
+    return integ
+
+
+@contextlib.contextmanager
+def _machine_lock(folder: Path):
+    """An exclusive lock on ``folder``'s ``compile.lock`` while the block runs."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        yield
+        return
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "compile.lock", "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)

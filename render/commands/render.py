@@ -151,9 +151,9 @@ def run(args) -> int:
             import pyoidn  # noqa: F401 - raises ImportError (reported below) when missing
         # an image too large for memory is refused before the scene is diced
         check_film_memory(scene.camera.width, scene.camera.height, aovs, denoise)
-        from render.precompile import before_first_render
+        from render.precompile import notice_first_compile
 
-        before_first_render("pwc render", args.quiet)
+        notice_first_compile("pwc render", args.quiet)
         # a bar redrawn with carriage returns only on a terminal, not into a log
         progress = not args.quiet and sys.stderr.isatty()
         if args.scheduler or args.workers:

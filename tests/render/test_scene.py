@@ -508,20 +508,28 @@ def test_pwc_render_own_profile_outputs_checked_first_and_summary(tmp_path):
     assert r.returncode == 3 and "cannot read the scene file" in r.stderr
 
 
-def test_first_compile_notice_only_on_a_cold_cache(tmp_path, monkeypatch, capsys):
-    from render.jit import cache_dir, notice_first_compile
+def test_first_compile_notice_only_on_a_cold_cache_once_per_process(tmp_path, monkeypatch,
+                                                                   capsys):
+    from render.jit import cache_dir
+    from render.precompile import READY, first_compile, notice_first_compile
 
     monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
+    assert notice_first_compile("pwc render", quiet=True) is True
+    assert capsys.readouterr().err == ""
     assert notice_first_compile("pwc render") is True
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "compiling render kernels, once per machine" in err
-    assert notice_first_compile("pwc render", quiet=True) is True
+    assert notice_first_compile("pwc") is True  # said once per process, whoever asks
     assert capsys.readouterr().err == ""
-    (cache_dir() / "compiled").mkdir(parents=True)
-    (cache_dir() / "compiled" / "kernel-12.py311.nbi").write_bytes(b"")
+    # kernels in the cache are not enough: a render must have run to its end
+    (cache_dir() / "path").mkdir(parents=True)
+    (cache_dir() / "path" / "trace-12.py311.nbi").write_bytes(b"")
+    assert notice_first_compile("pwc render") is True
+    (cache_dir() / READY).write_bytes(b"")
     assert notice_first_compile("pwc render") is False
-    assert capsys.readouterr().err == ""
-
+    with first_compile() as compiling:  # ready: no turn taken, nothing compiled
+        assert compiling is False
+    assert not (cache_dir() / "compile.lock").exists()
 
 
 def test_pwc_render_a_bundled_scene_by_name_from_anywhere(tmp_path):
