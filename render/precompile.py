@@ -125,25 +125,39 @@ def notice_first_compile(prog: str, quiet: bool = False) -> bool:
 @contextlib.contextmanager
 def first_compile():
     """Around the first kernel calls of a render (:func:`compiled_integrator`): on a
-    cold cache, take this machine's turn to compile (a lock file in the cache folder;
-    others wait for it, then load what it compiled), start
+    cold cache, take this machine's turn to compile (a lock on ``compile.lock`` in the
+    cache folder; others wait for it, then load what it compiled), start
     :func:`compile_df_kernels_aside`, and when the block ends without an error write
     :data:`READY`.  Yields whether this block compiles; on a ready cache it neither
-    waits nor compiles.  Without ``fcntl`` (not POSIX) there is no lock, and processes
-    compile alike."""
+    waits nor compiles, nor where the cache folder cannot be written (numba then caches
+    elsewhere, or not at all).  Without ``fcntl`` (not POSIX) there is no lock, and
+    processes compile alike."""
     if kernels_ready():
         yield False
         return
     from render.jit import cache_dir
 
     folder = cache_dir()
-    with _machine_lock(folder):
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        lock = open(folder / "compile.lock", "a")  # noqa: SIM115 - closed below
+    except OSError:
+        yield False
+        return
+    with lock:  # closing the file releases the lock
+        try:
+            import fcntl
+
+            fcntl.flock(lock, fcntl.LOCK_EX)
+        except ImportError:  # not POSIX
+            pass
         if kernels_ready():  # compiled by the process this one waited for
             yield False
             return
         compile_df_kernels_aside()
         yield True
-        (folder / READY).touch()
+        with contextlib.suppress(OSError):
+            (folder / READY).touch()
 
 
 def compiled_integrator(scene, geometry, aovs=()):
@@ -160,20 +174,3 @@ def compiled_integrator(scene, geometry, aovs=()):
             n = min(64, integ.camera.width * integ.camera.height)
             integ.trace(np.arange(n), np.zeros(n, np.int64), 0)
     return integ
-
-
-@contextlib.contextmanager
-def _machine_lock(folder: Path):
-    """An exclusive lock on ``folder``'s ``compile.lock`` while the block runs."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX
-        yield
-        return
-    folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "compile.lock", "a") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(f, fcntl.LOCK_UN)

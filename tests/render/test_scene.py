@@ -532,6 +532,17 @@ def test_first_compile_notice_only_on_a_cold_cache_once_per_process(tmp_path, mo
     assert not (cache_dir() / "compile.lock").exists()
 
 
+def test_a_cache_folder_that_cannot_be_made_takes_no_turn(tmp_path, monkeypatch):
+    from render.precompile import first_compile, kernels_ready, notice_first_compile
+
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path / "file"))
+    assert notice_first_compile("pwc render", quiet=True) is True
+    with first_compile() as compiling:  # numba caches elsewhere, or not at all
+        assert compiling is False
+    assert not kernels_ready()
+
+
 def test_pwc_render_a_bundled_scene_by_name_from_anywhere(tmp_path):
     r = run_pwc("render", "fig_14_28", "-o", "x.exr", "--spp", "1", "--resolution", "8", "6",
                 cwd=tmp_path)
