@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from render._typing import Arr, ArrayLike, Vec3
-from render.numerics import TOL, cross, dot, norm, safe_div, safe_sqrt, unitize
+from render.numerics import TOL, dot, safe_div, safe_sqrt
 
 __all__ = [
     "Frame",
@@ -103,16 +103,14 @@ class Frame:
         >>> f.s[0].tolist(), bool(np.allclose(np.cross(f.s, f.t), f.n))
         ([1.0, 0.0, 0.0], True)
         """
-        n = np.asarray(n, dtype=np.float64)
-        tu = np.asarray(tangent_u, dtype=np.float64)
-        tu = np.broadcast_to(tu, n.shape)
-        proj = tu - dot(tu, n)[:, None] * n
-        s, ok = unitize(proj)
-        # reject tangents whose projection is mostly rounding noise
-        ok &= norm(proj) > 1e-8 * norm(tu)
-        if not np.all(ok):
-            s = np.where(ok[:, None], s, cls.from_normal(n).s)
-        return cls(s, cross(n, s), n)
+        from render.df._kernel_common import frames_from_normal_tangent
+
+        n = np.ascontiguousarray(n, dtype=np.float64)
+        tu = np.ascontiguousarray(np.broadcast_to(np.asarray(tangent_u, dtype=np.float64),
+                                                  n.shape))
+        s, t = np.empty(n.shape), np.empty(n.shape)
+        frames_from_normal_tangent(n, tu, s, t)  # one compiled pass
+        return cls(s, t, n)
 
     def to_local(self, v: ArrayLike) -> Vec3:
         """World rows ``v`` (n, 3) expressed in this frame."""

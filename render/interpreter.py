@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from render.df._kernel_common import frame_from_normal_tangent, unitize
 from render.df._microfacet import mf_albedo as _mf_albedo
 from render.df._signature import MODE_MASK, REFLECT
 from render.df.anisotropic_vdf import albedo as _vdf_albedo
@@ -524,14 +525,6 @@ def _agree(identity, w, wl):
 
 
 @njit
-def _unit(x, y, z):
-    length = math.sqrt(x * x + y * y + z * z)
-    if not length > 1e-300:
-        return 0.0, 0.0, 0.0, False
-    return x / length, y / length, z / length, True
-
-
-@njit
 def _set_bases(frames, P, row, ws, fo, f0, f1):
     """The basis of every frame ``f0 .. f1 - 1`` in its parent frame
     (``Frame.from_normal_tangent`` of the layer's unit normal and ``tangent_u``); frame
@@ -546,23 +539,13 @@ def _set_bases(frames, P, row, ws, fo, f0, f1):
             ws[o + _FN + 2] = 1.0
             continue
         s, t = frames[f, 1], frames[f, 2]
-        nx, ny, nz, ok = _unit(P[row, s], P[row, s + 1], P[row, s + 2])
+        nx, ny, nz, ok = unitize(P[row, s], P[row, s + 1], P[row, s + 2])
         if not ok:
             nx, ny, nz = 0.0, 0.0, 1.0
-        tx, ty, tz = P[row, t], P[row, t + 1], P[row, t + 2]
-        c = tx * nx + ty * ny + tz * nz
-        px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
-        sx, sy, sz, ok = _unit(px, py, pz)
-        ok = ok and math.sqrt(px * px + py * py + pz * pz) > 1e-8 * math.sqrt(
-            tx * tx + ty * ty + tz * tz)
-        if not ok:  # Frame.from_normal (Duff et al.)
-            sign = 1.0 if nz >= 0.0 else -1.0
-            a = -1.0 / (sign + nz)
-            bb = nx * ny * a
-            sx, sy, sz = 1.0 + sign * nx * nx * a, sign * bb, -sign * nx
+        sx, sy, sz, tx, ty, tz = frame_from_normal_tangent(nx, ny, nz, P[row, t],
+                                                           P[row, t + 1], P[row, t + 2])
         ws[o + _FS], ws[o + _FS + 1], ws[o + _FS + 2] = sx, sy, sz
-        ws[o + _FT], ws[o + _FT + 1], ws[o + _FT + 2] = (ny * sz - nz * sy, nz * sx - nx * sz,
-                                                         nx * sy - ny * sx)
+        ws[o + _FT], ws[o + _FT + 1], ws[o + _FT + 2] = tx, ty, tz
         ws[o + _FN], ws[o + _FN + 1], ws[o + _FN + 2] = nx, ny, nz
 
 

@@ -45,7 +45,7 @@ from render import embree, interpreter
 from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.camera import camera_ray
-from render.df._kernel_common import unitize
+from render.df._kernel_common import frame_from_normal_tangent, unitize
 from render.df.measured_edf import O2L as MEASURED_O2L
 from render.df.spot_edf import SIGNATURE as _SPOT
 from render.hair import hair_hit
@@ -209,22 +209,6 @@ def _power(a, b):
 @njit(inline="always")
 def _dot(ax, ay, az, bx, by, bz):
     return ax * bx + ay * by + az * bz
-
-
-@njit(inline="always")
-def _frame(nx, ny, nz, tx, ty, tz):
-    """The shading frame's (s, t) from a unit normal and a tangent (Gram–Schmidt; Duff
-    et al.'s frame where the tangent is missing or parallel)."""
-    c = _dot(tx, ty, tz, nx, ny, nz)
-    px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
-    sx, sy, sz, ok = unitize(px, py, pz)
-    ok = ok and px * px + py * py + pz * pz > 1e-16 * (tx * tx + ty * ty + tz * tz)
-    if not ok:
-        sign = 1.0 if nz >= 0.0 else -1.0
-        a = -1.0 / (sign + nz)
-        b = nx * ny * a
-        sx, sy, sz = 1.0 + sign * nx * nx * a, sign * b, -sign * nx
-    return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
 
 
 # ------------------------------------------------- the lights, for tests and set-up
@@ -579,7 +563,7 @@ def trace(scene, tb, n, resume, pixel, index, seed, kind, v1, lf, li, so, sior,
                     shift = _parallel_shift(eps, gx, gy, gz, dx, dy, dz)
                     crossings += 1
                     continue
-                sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+                sx, sy, sz, qx, qy, qz = frame_from_normal_tangent(nx, ny, nz, tx, ty, tz)
                 wox = -_dot(dx, dy, dz, sx, sy, sz)
                 woy = -_dot(dx, dy, dz, qx, qy, qz)
                 woz = -_dot(dx, dy, dz, nx, ny, nz)
@@ -808,7 +792,7 @@ def _emission_at(tb, params, ws, ep, f, b1, b2, wx, wy, wz):
         return 0.0, 0.0, 0.0
     _, _, _, nx, ny, nz, tx, ty, tz, _, _, _, _, _ = _attributes(tb.packed, tb.faces,
                                                                  face_normal, f, b1, b2)
-    sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+    sx, sy, sz, qx, qy, qz = frame_from_normal_tangent(nx, ny, nz, tx, ty, tz)
     return _emission(tb, params, ws, ep, k, not front, sx, sy, sz, qx, qy, qz, nx, ny, nz,
                      _dot(wx, wy, wz, sx, sy, sz), _dot(wx, wy, wz, qx, qy, qz),
                      _dot(wx, wy, wz, nx, ny, nz))
@@ -999,7 +983,7 @@ def _cross_shadow(tb, sf, si, sso, ssior, r, f, hb1, hb2, t, v, params, bf, bslo
             v1, ph, idx, SHADOW_PAIRS + (si[r, S_SEGMENT] << 8) + cross, kind)[0] >= opacity:
         pass  # cut: passes unchanged
     elif flags & NULL and roots[slot] >= 0:
-        sx, sy, sz, qx, qy, qz = _frame(nx, ny, nz, tx, ty, tz)
+        sx, sy, sz, qx, qy, qz = frame_from_normal_tangent(nx, ny, nz, tx, ty, tz)
         wox = -_dot(dx, dy, dz, sx, sy, sz)
         woy = -_dot(dx, dy, dz, qx, qy, qz)
         woz = -_dot(dx, dy, dz, nx, ny, nz)

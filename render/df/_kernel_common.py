@@ -64,6 +64,8 @@ __all__ = [
     "ior_pair",
     "cosine_hemisphere",
     "frame_from_normal",
+    "frame_from_normal_tangent",
+    "frames_from_normal_tangent",
     "tangent_axes",
 ]
 
@@ -312,6 +314,29 @@ def frame_from_normal(nx, ny, nz):
     b = nx * ny * a
     return (1.0 + sign * (nx * nx) * a, sign * b, -sign * nx,
             b, sign + (ny * ny) * a, -ny)
+
+
+@njit
+def frame_from_normal_tangent(nx, ny, nz, tx, ty, tz):
+    """:meth:`render.frame.Frame.from_normal_tangent` of one unit normal and a tangent
+    -> ``(sx, sy, sz, tx, ty, tz)``: ``s`` along the tangent projected into the tangent
+    plane (Gram–Schmidt), ``t = n x s``; :func:`frame_from_normal`'s ``s`` where the
+    tangent is zero or along ``n`` (its projection no longer than 1e-8 of it: rounding
+    noise)."""
+    c = dot3(tx, ty, tz, nx, ny, nz)
+    px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
+    sx, sy, sz, ok = unitize(px, py, pz)
+    if not (ok and px * px + py * py + pz * pz > 1e-16 * (tx * tx + ty * ty + tz * tz)):
+        sx, sy, sz, _, _, _ = frame_from_normal(nx, ny, nz)
+    return sx, sy, sz, ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+
+
+@njit
+def frames_from_normal_tangent(n, tu, s, t):
+    """:func:`frame_from_normal_tangent` of rows ``n``, ``tu`` (n, 3) into ``s``, ``t``."""
+    for i in range(n.shape[0]):
+        s[i, 0], s[i, 1], s[i, 2], t[i, 0], t[i, 1], t[i, 2] = frame_from_normal_tangent(
+            n[i, 0], n[i, 1], n[i, 2], tu[i, 0], tu[i, 1], tu[i, 2])
 
 
 @njit

@@ -46,6 +46,27 @@ def test_tangent_frame_follows_tangent_u(rng):
     assert np.allclose(g.s, Frame.from_normal(n[:2]).s)
 
 
+@pytest.mark.parametrize("length", [1e-140, 1e-20, 1.0, 1e20, 1e140])
+def test_tangent_frame_at_tiny_and_huge_tangents(rng, length):
+    # the same frame whatever the tangent's length, one tangent for every row alike
+    n = _normals(rng, 200)
+    tu = rng.normal(size=3)
+    ref = Frame.from_normal_tangent(n, np.broadcast_to(tu, n.shape))
+    f = Frame.from_normal_tangent(n, tu * length)
+    assert np.all(np.isfinite(f.s)) and np.all(np.isfinite(f.t))
+    assert np.allclose(f.s, ref.s, atol=1e-12) and np.allclose(f.t, ref.t, atol=1e-12)
+
+
+def test_tangent_within_rounding_of_the_normal_falls_back():
+    n = np.array([[0.0, 0.6, 0.8]] * 3)
+    tu = n + np.array([[1e-10, 0.0, 0.0], [1e-7, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    f = Frame.from_normal_tangent(n, tu)
+    duff = Frame.from_normal(n[:1]).s[0]
+    assert np.allclose(f.s[0], duff) and np.allclose(f.s[2], duff)  # noise, and parallel
+    assert np.allclose(f.s[1], [1.0, 0.0, 0.0])  # 1e-7 off the normal: a real direction
+    assert np.allclose(np.cross(f.s, f.t), n, atol=1e-12)
+
+
 def test_spherical_helpers_at_poles_and_horizon():
     w = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
     assert cos_phi(w).tolist() == [1.0, 1.0, 1.0, 0.0]
