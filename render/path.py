@@ -301,23 +301,6 @@ def hit_attributes(packed, faces, face_normal, f, b1, b2, out):
             out[i, c] = a[c]
 
 
-@njit
-def transform_rows(v, m, t, unit, out):
-    """``out[i] = m @ (v[i] - t)`` for rows (n, 3), made unit when ``unit`` (``+z`` where
-    a row is too short): objects' points, normals and tangents between world and object
-    space (:class:`render.scene.SceneObject`), one pass."""
-    for i in range(v.shape[0]):
-        x, y, z = v[i, 0] - t[0], v[i, 1] - t[1], v[i, 2] - t[2]
-        a = m[0, 0] * x + m[0, 1] * y + m[0, 2] * z
-        b = m[1, 0] * x + m[1, 1] * y + m[1, 2] * z
-        c = m[2, 0] * x + m[2, 1] * y + m[2, 2] * z
-        if unit:
-            a, b, c, ok = unitize(a, b, c)
-            if not ok:
-                a, b, c = 0.0, 0.0, 1.0
-        out[i, 0], out[i, 1], out[i, 2] = a, b, c
-
-
 def scratch(tb) -> np.ndarray:
     """The interpreter's scratch for the programs of ``tb`` (one per thread and kernel
     call: the kernels own no memory, so they count no references)."""

@@ -322,44 +322,29 @@ class SceneObject:
         geometry = getattr(self.material, "geometry", None)
         return getattr(geometry, "displacement", None)
 
-    # object <-> world (rows (n, 3), one compiled pass each)
+    # object <-> world (row vectors)
     def to_object_points(self, p: np.ndarray) -> np.ndarray:
         """World points (n, 3) in object space."""
-        return _transform_rows(p, self.inv_linear, self.translation, False)
+        return (p - self.translation) @ self.inv_linear.T
 
     def to_object_normals(self, n: np.ndarray) -> np.ndarray:
         """World normals (n, 3) in object space (unit; normals transform by L^T)."""
-        return _transform_rows(n, self.linear.T, _ORIGIN, True)
+        return _unit_rows(n @ self.linear)
 
     def to_object_vectors(self, v: np.ndarray) -> np.ndarray:
         """World tangent vectors (n, 3) in object space (unit)."""
-        return _transform_rows(v, self.inv_linear, _ORIGIN, True)
+        return _unit_rows(v @ self.inv_linear.T)
 
     def to_world_normals(self, n: np.ndarray) -> np.ndarray:
         """Object-space normals (n, 3) in world space (unit)."""
-        return _transform_rows(n, self.inv_linear.T, _ORIGIN, True)
-
-
-_ORIGIN = np.zeros(3)
+        return _unit_rows(n @ self.inv_linear)
 
 
 def _unit_rows(v: np.ndarray) -> np.ndarray:
-    """Rows (n, 3) made unit; a row too short for that becomes +z."""
-    return _transform_rows(v, np.eye(3), _ORIGIN, True)
+    from render.numerics import unitize
 
-
-def _transform_rows(v, m, t, unit: bool) -> np.ndarray:
-    """``m @ (v_i - t)`` for every row of ``v`` (n, 3), made unit when ``unit`` (+z
-    where a row is too short, :func:`render.numerics.unitize`), in one compiled pass."""
-    from render.path import transform_rows
-
-    v = np.asarray(v, dtype=np.float64)
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise ValueError(f"expected rows of 3 numbers (n, 3), got shape {v.shape}")
-    out = np.empty(v.shape)
-    transform_rows(v, np.ascontiguousarray(m, dtype=np.float64),
-                   np.asarray(t, dtype=np.float64), unit, out)
-    return out
+    u, ok = unitize(v)
+    return np.where(ok[:, None], u, np.array([0.0, 0.0, 1.0]))
 
 
 @dataclass
