@@ -322,7 +322,11 @@ def frame_from_normal_tangent(nx, ny, nz, tx, ty, tz):
     -> ``(sx, sy, sz, tx, ty, tz)``: ``s`` along the tangent projected into the tangent
     plane (Gram–Schmidt), ``t = n x s``; :func:`frame_from_normal`'s ``s`` where the
     tangent is zero or along ``n`` (its projection no longer than 1e-8 of it: rounding
-    noise)."""
+    noise).  Only the tangent's direction counts: a huge one is scaled down first, so
+    that its square does not overflow."""
+    m = max(max(abs(tx), abs(ty)), abs(tz))
+    if m > 1e150:
+        tx, ty, tz = tx / m, ty / m, tz / m
     c = dot3(tx, ty, tz, nx, ny, nz)
     px, py, pz = tx - c * nx, ty - c * ny, tz - c * nz
     sx, sy, sz, ok = unitize(px, py, pz)
