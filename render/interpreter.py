@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from render.df._kernel_common import frame_from_normal_tangent, unitize
+from render.df import _kernel_common as kc
 from render.df._microfacet import mf_albedo as _mf_albedo
 from render.df._signature import MODE_MASK, REFLECT
 from render.df.anisotropic_vdf import albedo as _vdf_albedo
@@ -539,11 +539,11 @@ def _set_bases(frames, P, row, ws, fo, f0, f1):
             ws[o + _FN + 2] = 1.0
             continue
         s, t = frames[f, 1], frames[f, 2]
-        nx, ny, nz, ok = unitize(P[row, s], P[row, s + 1], P[row, s + 2])
+        nx, ny, nz, ok = kc.unitize(P[row, s], P[row, s + 1], P[row, s + 2])
         if not ok:
             nx, ny, nz = 0.0, 0.0, 1.0
-        sx, sy, sz, tx, ty, tz = frame_from_normal_tangent(nx, ny, nz, P[row, t],
-                                                           P[row, t + 1], P[row, t + 2])
+        sx, sy, sz, tx, ty, tz = kc.frame_from_normal_tangent(nx, ny, nz, P[row, t],
+                                                              P[row, t + 1], P[row, t + 2])
         ws[o + _FS], ws[o + _FS + 1], ws[o + _FS + 2] = sx, sy, sz
         ws[o + _FT], ws[o + _FT + 1], ws[o + _FT + 2] = tx, ty, tz
         ws[o + _FN], ws[o + _FN + 1], ws[o + _FN + 2] = nx, ny, nz
