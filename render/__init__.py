@@ -6,11 +6,14 @@ Conventions for directions and frames: :mod:`render.frame`.  Interfaces: :mod:`r
 """
 
 import importlib
+import os
+from pathlib import Path
 
 from render.bsdf import Bsdf, BsdfSample, Edf, EdfSample, Lobe
 from render.frame import Frame
 
-__all__ = ["df", "Bsdf", "BsdfSample", "Edf", "EdfSample", "Lobe", "Frame", "render"]
+__all__ = ["df", "Bsdf", "BsdfSample", "Edf", "EdfSample", "Lobe", "Frame", "render",
+           "checkout_pythonpath"]
 
 
 def __getattr__(name: str):
@@ -28,3 +31,12 @@ def render(scene, **options):
     from render.integrator import render as _render
 
     return _render(scene, **options)
+
+
+def checkout_pythonpath(rest: str | None = None) -> str:
+    """``PYTHONPATH`` for a child process (a kernel compiler, a Dask worker, a test's
+    ``pwc``) that must import this checkout's packages, whatever its working folder: this
+    checkout first, then ``rest`` (default: this process's ``PYTHONPATH``)."""
+    here = str(Path(__file__).resolve().parents[1])
+    rest = os.environ.get("PYTHONPATH") if rest is None else rest
+    return os.pathsep.join(p for p in (here, rest) if p)

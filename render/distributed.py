@@ -50,8 +50,8 @@ import time as _time
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 
+from render import checkout_pythonpath
 from render.film import Film
 from render.passes import PassPlan, render_chunk
 
@@ -150,8 +150,6 @@ def cluster(
                 f"a local cluster needs >= 1 worker of >= 1 thread, got {workers} x "
                 f"{threads_per_worker}"
             )
-        root = str(Path(__file__).resolve().parents[1])
-        path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)
         with (
             LocalCluster(
                 n_workers=workers,
@@ -163,7 +161,7 @@ def cluster(
                 scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
                 # the shutdown chatter of workers losing their scheduler is not news
                 silence_logs=logging.CRITICAL,
-                env={"PYTHONPATH": path},
+                env={"PYTHONPATH": checkout_pythonpath()},
             ) as local,
             Client(local) as client,
         ):

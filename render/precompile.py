@@ -28,7 +28,6 @@ import inspect
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 from numba import types
 
@@ -82,11 +81,11 @@ def compile_df_kernels_aside() -> subprocess.Popen | None:
     to its end whatever this process does; its output is discarded."""
     if cores() < 2:
         return None
-    here = str(Path(__file__).resolve().parents[1])  # this checkout's render package
-    path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH")) if p)
+    from render import checkout_pythonpath
+
     return subprocess.Popen(
         [sys.executable, "-c", "from render.precompile import compile_df_kernels as c; c()"],
-        env={**os.environ, "PYTHONPATH": path}, stdin=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONPATH": checkout_pythonpath()}, stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 

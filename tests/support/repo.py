@@ -12,8 +12,10 @@ PROFILES = sorted((ROOT / "profiles").glob("*.pwc"))
 def checkout_env(env: dict | None = None) -> dict:
     """``env`` (default: this process's) with this checkout first on ``PYTHONPATH``, so a
     subprocess runs this tree's packages from any current folder."""
+    from render import checkout_pythonpath
+
     env = dict(os.environ if env is None else env)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), *filter(None, [env.get("PYTHONPATH")])])
+    env["PYTHONPATH"] = checkout_pythonpath(env.get("PYTHONPATH", ""))
     return env
 
 
