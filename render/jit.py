@@ -26,13 +26,14 @@ from __future__ import annotations
 import hashlib
 import os
 from pathlib import Path
+from types import FunctionType
 
 import numba
 from numba.core import types
 from numba.core.caching import CacheImpl, _CacheLocator
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["njit", "cache_dir", "SOURCE_KEY"]
+__all__ = ["njit", "instantiate", "cache_dir", "SOURCE_KEY"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -68,6 +69,7 @@ class _RenderCacheLocator(_CacheLocator):
 
     def __init__(self, py_func, py_file):
         self._lineno = py_func.__code__.co_firstlineno
+        self._module = py_func.__module__
         rel = Path(py_file).resolve().relative_to(_PACKAGE)
         self._cache_path = str(cache_dir() / rel.with_suffix(""))
 
@@ -78,7 +80,9 @@ class _RenderCacheLocator(_CacheLocator):
         return SOURCE_KEY
 
     def get_disambiguator(self):
-        return str(self._lineno)
+        # the module tells apart the instances of one template (:func:`instantiate`),
+        # which share its file and line
+        return f"{self._lineno}-{self._module}"
 
     @classmethod
     def from_function(cls, py_func, py_file):
@@ -129,6 +133,21 @@ def njit(function=None, allocates: bool = False, **options):
         return disp
 
     return decorate if function is None else decorate(function)
+
+
+def instantiate(template, module: str, allocates: bool = False, **names):
+    """The plain function ``template`` compiled as a kernel of the module named ``module``,
+    with ``names`` of its globals bound anew: one body of code that serves several dfs,
+    each instance compiled for its own.
+
+    numba caches neither a closure nor a kernel that takes another as an argument (both
+    keys hold an object's per-process id, so every run compiles them again); an instance
+    is a copy of the template's code over its globals and ``names``, keyed in the cache
+    by ``module`` (:class:`_RenderCacheLocator`)."""
+    scope = {**template.__globals__, **names, "__name__": module}
+    f = FunctionType(template.__code__, scope, template.__name__, template.__defaults__)
+    f.__doc__, f.__qualname__ = template.__doc__, template.__qualname__
+    return njit(f, allocates=allocates)
 
 
 def _in_package(function) -> bool:

@@ -474,10 +474,12 @@ def lane_table_average(T, t, inside, ru, rv, ior_outside, ior_inside):
 
 
 def glossy_albedo_table(cls: type, row, flags: int) -> np.ndarray:
-    """The node table of a glossy lobe with MDL's glossy signature (``roughness_u``,
-    ``roughness_v``, ``mode`` and the IOR context: ``simple_glossy_bsdf`` and the
-    ``microfacet_*`` dfs): a :func:`node_table` for one packed row (constant arguments),
-    a :func:`lanes_table` for rows whose roughness or IOR differ (per-lane arguments).
+    """The node table of a glossy lobe (:mod:`render.df._glossy_lobe`): a
+    :func:`node_table` for one packed row (constant arguments), a :func:`lanes_table` for
+    rows whose roughness or IOR differ (per-lane arguments).  The lobe has MDL's glossy
+    signature (``roughness_u``, ``roughness_v``, ``mode`` and the IOR context:
+    ``simple_glossy_bsdf`` and the ``microfacet_*`` dfs), or has no ``mode``: it reflects
+    only and has no IOR (``roughness_u`` and ``roughness_v``, or one ``roughness``).
 
     Parameters
     ----------
@@ -493,22 +495,32 @@ def glossy_albedo_table(cls: type, row, flags: int) -> np.ndarray:
     from render.df._signature import MODE_FLAGS, MODE_MASK, REFLECT, THIN_WALLED
 
     sig = sys.modules[cls.__module__].SIGNATURE
-    _ru, _rv = sig.offset("roughness_u"), sig.offset("roughness_v")
-    _o, _i = sig.offset("ior_outside"), sig.offset("ior_inside")
+    names = {p.name for p in sig.params}
+    if "roughness_u" in names:
+        _ru, _rv = sig.offset("roughness_u"), sig.offset("roughness_v")
+    else:
+        _ru = _rv = sig.offset("roughness")
     rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
     mode = flags & MODE_MASK
-    thin = (flags & THIN_WALLED) != 0
-    key = (ScatterMode.scatter_reflect if mode == REFLECT or thin
-           else ScatterMode({v: k for k, v in MODE_FLAGS.items()}[mode]))
-    cols = [_ru, _rv] if key is ScatterMode.scatter_reflect else [_ru, _rv, _o, _i]
+    if "mode" not in names:
+        key = None
+    elif mode == REFLECT or (flags & THIN_WALLED) != 0:
+        key = ScatterMode.scatter_reflect
+    else:
+        key = ScatterMode({v: k for k, v in MODE_FLAGS.items()}[mode])
+    refracts = key not in (None, ScatterMode.scatter_reflect)
+    cols = [_ru, _rv]
+    if refracts:
+        _o, _i = sig.offset("ior_outside"), sig.offset("ior_inside")
+        cols += [_o, _i]
     ru = np.maximum(rows[:, _ru], kc.ROUGHNESS_MIN)
     rv = np.maximum(rows[:, _rv], kc.ROUGHNESS_MIN)
     if np.all(rows[:, cols] == rows[0, cols]):
-        if key is ScatterMode.scatter_reflect:
+        if not refracts:
             return node_table(cls, key, ru[0], rv[0])
         o, i = kc.ior_pair(rows[0, _o], rows[0, _i], False, False, True)
         return node_table(cls, key, ru[0], rv[0], i / o, o / i)
-    if key is ScatterMode.scatter_reflect:
+    if not refracts:
         return lanes_table(cls, key, ru, rv)
     iors = rows[:, [_o, _i]]
     etas = np.empty_like(iors)

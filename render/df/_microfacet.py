@@ -25,8 +25,8 @@ picks the event with probability ``P``, and reflects or refracts ``wo`` about ``
 
 The same framework as scalar numba kernels (the render core): :func:`mf_geometry` and
 :func:`mf_finish` around the distribution's ``D`` for ``eval_pdf``, :func:`mf_sample_dir`
-from a sampled half vector for ``sample``; the df module composes them
-(``simple_glossy_bsdf.eval_pdf``).
+from a sampled half vector for ``sample``; the df module composes them into its lobe,
+which :mod:`render.df._glossy_lobe` turns into the df's kernels.
 
 Departures from libbsdf, all deliberate:
 
@@ -43,9 +43,9 @@ The ``microfacet_*`` dfs add two normal distributions (GGX and Beckmann, anisotr
 in the ``tangent_u`` frame, ``alpha = roughness``) and Smith masking
 (``G2 = G1(wo) G1(wi)``, uncorrelated, for reflection and refraction, sampled through
 the distribution of visible normals: Heitz 2018 for GGX, the stretched 1-D slope
-inversion of Heitz & d'Eon 2014 for Beckmann), as the generic kernels
-:func:`mf_eval_pdf`, :func:`mf_sample`, :func:`mf_albedo`, each df module calling them
-with its distribution and masking.
+inversion of Heitz & d'Eon 2014 for Beckmann), as one lobe (:func:`mf_setup`,
+:func:`mf_value`, :func:`mf_single_sample`) that each df module sets up with its
+distribution and masking.
 
 **Energy compensation** (``multiscatter_tint``, libbsdf's Kelemen & Szirmay-Kalos lobe,
 reference §2.4), shared by every glossy lobe (:func:`ms_lobe`, :func:`ms_eval`,
@@ -66,11 +66,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from render.bsdf import (
-    Lobe,
-)
 from render.df import _kernel_common as kc
 from render.df._albedo import lane_table_albedo, lane_table_average
 from render.df._signature import (
@@ -87,12 +82,10 @@ from render.jit import njit
 
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
            "mf_sample_dir", "GGX", "BECKMANN", "VCAVITIES", "SMITH", "mf_d", "mf_smith_g1",
-           "mf_sample_d_cos", "mf_sample_visible", "mf_eval_pdf", "mf_sample", "mf_albedo",
-           "ms_lobe", "ms_eval", "ms_choice", "ms_sampled", "ms_on", "ms_albedo",
+           "mf_sample_d_cos", "mf_sample_visible", "mf_setup", "mf_value", "mf_single_sample",
+           "mf_ms_lobe", "ms_lobe", "ms_eval", "ms_choice", "ms_sampled", "ms_on", "ms_albedo",
            "microfacet_signature", "mf_film_event", "mf_film_on"]
 
-_TR = int(Lobe.GLOSSY_TRANSMISSION)
-_RE = int(Lobe.GLOSSY_REFLECTION)
 
 # --- kernels (the compiled render core) ----------------------------------------------------
 # The framework's scalar pieces, shared by the microfacet dfs' kernels: the caller orients
@@ -584,10 +577,11 @@ def ms_sampled(T, t, flip, c, single, ox, oy, oz, ix, iy, iz, w0, w1, w2, pdf):
     return f0 / pdf, f1 / pdf, f2 / pdf, pdf
 
 
-# --- the microfacet_* dfs: generic kernels over (dist, mask) ------------------------------
+# --- the microfacet_* dfs: their lobe over (dist, mask), for render.df._glossy_lobe ----------
 @njit
-def _setup(P, row, b, flags, flip):
-    """``(ok, au, av, tx, ty, eta1, eta2, glossy, ms)`` of one lane."""
+def mf_setup(dist, mask, P, row, b, flags, flip):
+    """A lane's setup (:mod:`render.df._glossy_lobe`) with distribution ``dist`` and masking
+    ``mask``: ``s = (dist, mask, au, av, tx, ty, eta1, eta2)``."""
     au = max(P[row, b + _RU], kc.ROUGHNESS_MIN)
     av = max(P[row, b + _RV], kc.ROUGHNESS_MIN)
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
@@ -602,20 +596,21 @@ def _setup(P, row, b, flags, flip):
     if not (glossy or ms):
         ok = False
     eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_WALLED) != 0, True)
-    return ok, au, av, tx, ty, eta1, eta2, glossy, ms
+    return ok, glossy, ms, flip, (dist, mask, au, av, tx, ty, eta1, eta2)
 
 
 @njit
-def _ms_lobe(P, row, b, au, av, tx, ty, glossy):
+def mf_ms_lobe(P, row, b, s, glossy):
     """:func:`ms_lobe` of a lane of a microfacet_* df."""
+    dist, mask, au, av, tx, ty, eta1, eta2 = s
     return ms_lobe(P, row, b + _MS, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN], tx, ty,
                    glossy)
 
 
 @njit
-def _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, au, av, tx, ty,
-           eta1, eta2):
+def mf_value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, s):
     """The single-scattering lobe at an oriented pair -> ``(w0, w1, w2, pdf)``."""
+    dist, mask, au, av, tx, ty, eta1, eta2 = s
     ok, refr, hx, hy, hz, kh1, kh2, p_ev = mf_half(flags, eta1, eta2, wox, woy, woz,
                                                    wix, wiy, wiz)
     if not ok:
@@ -643,9 +638,9 @@ def _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, au, av, t
 
 
 @njit
-def _single_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, au, av, tx, ty,
-                   eta1, eta2):
+def mf_single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, s):
     """A single-scattering sample at an oriented ``wo`` -> ``(ok, wix, wiy, wiz)``."""
+    dist, mask, au, av, tx, ty, eta1, eta2 = s
     if not woz > kc.COS_ZERO:
         return False, 0.0, 0.0, 0.0
     if mask == VCAVITIES:
@@ -656,107 +651,3 @@ def _single_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, au
     return mf_sample_dir(flags, eta1, eta2, wox, woy, woz, ht * tx + hb * ty,
                          ht * ty - hb * tx, hn, u1, mask == VCAVITIES, P[row, b + _FILM_D],
                          P[row, b + _FILM_N], P[row, b + _FILM_N + 1], P[row, b + _FILM_N + 2])
-
-
-@njit
-def mf_eval_pdf(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
-    """``f |cos theta_i|`` and the pdf of :func:`mf_sample` -> ``(f0, f1, f2, pdf)``."""
-    flip = woz < 0.0
-    if flip:
-        woz = -woz
-        wiz = -wiz
-    ok, au, av, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0
-    w0, w1, w2, pdf = _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                             au, av, tx, ty, eta1, eta2)
-    f0, f1, f2 = w0 * pdf, w1 * pdf, w2 * pdf
-    if not ms:
-        return f0, f1, f2, pdf
-    if not woz > kc.COS_ZERO:
-        return 0.0, 0.0, 0.0, 0.0
-    return ms_eval(T, t, flip, _ms_lobe(P, row, b, au, av, tx, ty, glossy),
-                   wox, woy, woz, wix, wiy, wiz, f0, f1, f2, pdf)
-
-
-@njit
-def mf_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u1 = kc.clamp_u(u1)
-    u2x = kc.clamp_u(u2x)
-    u2y = kc.clamp_u(u2y)
-    flip = woz < 0.0
-    if flip:
-        woz = -woz
-    ok, au, av, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
-    if not (ok and woz > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    single = True
-    c = _ms_lobe(P, row, b, au, av, tx, ty, glossy)
-    if ms:
-        single, u1 = ms_choice(T, t, flip, c, wox, woy, woz, u1)
-    if single:
-        ok, wix, wiy, wiz = _single_sample(dist, mask, P, row, b, flags, wox, woy, woz, u1,
-                                           u2x, u2y, au, av, tx, ty, eta1, eta2)
-        if not ok:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    else:
-        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
-    w0, w1, w2, pdf = _value(dist, mask, P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                             au, av, tx, ty, eta1, eta2)
-    if ms:
-        w0, w1, w2, pdf = ms_sampled(T, t, flip, c, single, wox, woy, woz, wix, wiy, wiz,
-                                     w0, w1, w2, pdf)
-    if not pdf > 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    lobe = _TR if wiz < 0.0 else _RE
-    if flip:
-        wiz = -wiz
-    return wix, wiy, wiz, pdf, w0, w1, w2, lobe
-
-
-@njit
-def mf_albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """Directional albedo ``tint E(wo) + multiscatter_tint (1 - E(wo))`` (the second term
-    only where the compensation is on) of a glossy lobe with MDL's glossy signature, ``E``
-    from its node table -> ``(a0, a1, a2)``."""
-    flip = woz < 0.0
-    ok, au, av, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
-    mu = abs(woz)
-    if not (ok and mu > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0
-    E = ms_albedo(T, t, flip, au, av, P[row, b + _IOR_OUT], P[row, b + _IOR_IN], tx, ty,
-                  wox, woy, woz)
-    a0 = P[row, b + _TINT] * E
-    a1 = P[row, b + _TINT + 1] * E
-    a2 = P[row, b + _TINT + 2] * E
-    if ms:
-        a0 += P[row, b + _MS] * (1.0 - E)
-        a1 += P[row, b + _MS + 1] * (1.0 - E)
-        a2 += P[row, b + _MS + 2] * (1.0 - E)
-    return a0, a1, a2
-
-
-@njit(allocates=True)
-def mf_sample_weights(dist, mask, P, flags, wo, pts):
-    """First-channel single-scattering sample weights (m, k) on row 0 of ``P`` for each
-    ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo."""
-    m, k = wo.shape[0], pts.shape[0]
-    out = np.zeros((m, k))
-    au = max(P[0, _RU], kc.ROUGHNESS_MIN)
-    av = max(P[0, _RV], kc.ROUGHNESS_MIN)
-    for i in range(m):
-        flip = wo[i, 2] < 0.0
-        woz = abs(wo[i, 2])
-        ok, au, av, tx, ty, eta1, eta2, glossy, ms = _setup(P, 0, 0, flags, flip)
-        for j in range(k):
-            good, wix, wiy, wiz = _single_sample(dist, mask, P, 0, 0, flags, wo[i, 0],
-                                                 wo[i, 1], woz, kc.clamp_u(pts[j, 0]),
-                                                 kc.clamp_u(pts[j, 1]), kc.clamp_u(pts[j, 2]),
-                                                 au, av, tx, ty, eta1, eta2)
-            if good and ok:
-                w0, w1, w2, pdf = _value(dist, mask, P, 0, 0, flags, wo[i, 0], wo[i, 1], woz,
-                                         wix, wiy, wiz, au, av, tx, ty, eta1, eta2)
-                if pdf > 0.0:
-                    out[i, j] = w0
-    return out

@@ -28,9 +28,8 @@ Fresnel.  Departures: the exponent uses the exact ``log1p`` form (as in
 adds the energy-compensation lobe of :mod:`render.df._microfacet` from that table.
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
-and :func:`albedo` (with the table arguments ``T, t`` of :func:`albedo_table`, as in
-``simple_glossy_bsdf``), bit for bit the earlier numpy class's results
-(``tests/render/df/test_backscattering_glossy_reflection_bsdf_kernels.py``).
+and :func:`albedo`: the glossy-lobe kernels of :mod:`render.df._glossy_lobe` over this
+lobe, with the table arguments ``T, t`` of :func:`albedo_table`.
 """
 
 from __future__ import annotations
@@ -42,9 +41,10 @@ import numpy as np
 from render.bsdf import (
     Lobe,
 )
+from render.df import _glossy_lobe
 from render.df import _kernel_common as kc
-from render.df._albedo import lanes_table, node_table
-from render.df._microfacet import ms_albedo, ms_choice, ms_eval, ms_lobe, ms_on, ms_sampled
+from render.df._albedo import glossy_albedo_table
+from render.df._microfacet import ms_lobe, ms_on
 from render.df._signature import REQUIRED, Param, Signature
 from render.df.simple_glossy_bsdf import as_azimuth
 from render.jit import njit
@@ -105,8 +105,8 @@ def _k_p_half(kx, ky, kz, hx, hy, hz, e_u, e_v, tx, ty):
 
 
 @njit
-def _setup(P, row, b):
-    """``_setup`` for one lane -> ``(ok, e_u, e_v, tx, ty, glossy, ms)``."""
+def _setup(P, row, b, flags, flip):
+    """The lane's setup (:mod:`render.df._glossy_lobe`): ``s = (e_u, e_v, tx, ty)``."""
     ru = max(P[row, b + _RU], kc.ROUGHNESS_MIN)
     rv = max(P[row, b + _RV], kc.ROUGHNESS_MIN)
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
@@ -116,12 +116,13 @@ def _setup(P, row, b):
     ms = ms_on(0, P[row, b + _MS], P[row, b + _MS + 1], P[row, b + _MS + 2])
     if not (glossy or ms):
         ok = False
-    return ok, 2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty, glossy, ms
+    return ok, glossy, ms, False, (2.0 / (ru * ru), 2.0 / (rv * rv), tx, ty)
 
 
 @njit
-def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty):
-    """``_kernel`` for an oriented lane -> ``(w0, w1, w2, pdf)`` (0 where it does not reach)."""
+def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, s):
+    """The lobe at an oriented pair -> ``(w0, w1, w2, pdf)`` (0 where it does not reach)."""
+    e_u, e_v, tx, ty = s
     nk1 = woz
     nk2 = wiz
     if not (nk1 > kc.COS_ZERO and nk2 > kc.COS_ZERO):
@@ -147,35 +148,18 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty):
 
 
 @njit
-def _ms_lobe(P, row, b, tx, ty, glossy):
+def _ms_lobe(P, row, b, s, glossy):
     """:func:`ms_lobe` of a lane (the table's roughness: the parameters, not exponents)."""
+    e_u, e_v, tx, ty = s
     return ms_lobe(P, row, b + _MS, P[row, b + _RU], P[row, b + _RV], 1.0, 1.0, tx, ty, glossy)
 
 
 @njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)`` (``T``,
-    ``t``: the node's albedo table, read by the compensation lobe)."""
-    if woz < 0.0:  # orient: mirror both through the tangent plane
-        woz = -woz
-        wiz = -wiz
-    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0
-    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
-    if not ms:
-        return w0 * pdf, w1 * pdf, w2 * pdf, pdf
-    if not woz > kc.COS_ZERO:
-        return 0.0, 0.0, 0.0, 0.0
-    return ms_eval(T, t, False, _ms_lobe(P, row, b, tx, ty, glossy), wox, woy, woz,
-                   wix, wiy, wiz, w0 * pdf, w1 * pdf, w2 * pdf, pdf)
-
-
-@njit
-def _single_sample(wox, woy, woz, u2x, u2y, e_u, e_v, tx, ty):
+def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, s):
     """A single-scattering sample -> ``(ok, wix, wiy, wiz)``: a point of the anisotropic
     disk (phi as Ashikhmin–Shirley, r^2 = 1 - (1-u)^(1/(e+1))) placed at wo's tip gives
     the half vector; wi mirrors wo about it."""
+    e_u, e_v, tx, ty = s
     cp, sp = as_azimuth(e_u, e_v, u2x)
     e = e_u * cp * cp + e_v * sp * sp
     r = math.sqrt(max(-math.expm1(math.log1p(-u2y) / (e + 1.0)), 0.0))
@@ -193,90 +177,14 @@ def _single_sample(wox, woy, woz, u2x, u2y, e_u, e_v, tx, ty):
     return True, wix, wiy, wiz
 
 
-@njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u1 = kc.clamp_u(u1)
-    u2x = kc.clamp_u(u2x)
-    u2y = kc.clamp_u(u2y)
-    flip = woz < 0.0
-    if flip:
-        woz = -woz
-    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
-    if not (ok and woz > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    single = True
-    c = _ms_lobe(P, row, b, tx, ty, glossy)
-    if ms:
-        single, u1 = ms_choice(T, t, False, c, wox, woy, woz, u1)
-    if single:
-        ok, wix, wiy, wiz = _single_sample(wox, woy, woz, u2x, u2y, e_u, e_v, tx, ty)
-        if not ok:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    else:
-        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
-    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, e_u, e_v, tx, ty)
-    if ms:
-        w0, w1, w2, pdf = ms_sampled(T, t, False, c, single, wox, woy, woz, wix, wiy, wiz,
-                                     w0, w1, w2, pdf)
-    if not pdf > 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    if flip:
-        wiz = -wiz
-    return wix, wiy, wiz, pdf, w0, w1, w2, _GLOSSY_R
-
-
-@njit(allocates=True)
-def sample_weights(P, flags, wo, pts):
-    """First-channel single-scattering sample weights (m, k) on row 0 of ``P`` for each
-    ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
-    (:mod:`render.df._albedo`)."""
-    m, k = wo.shape[0], pts.shape[0]
-    out = np.zeros((m, k))
-    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, 0, 0)
-    if not ok:
-        return out
-    for i in range(m):
-        woz = abs(wo[i, 2])
-        for j in range(k):
-            good, wix, wiy, wiz = _single_sample(wo[i, 0], wo[i, 1], woz, kc.clamp_u(pts[j, 1]),
-                                                 kc.clamp_u(pts[j, 2]), e_u, e_v, tx, ty)
-            if good:
-                w0, w1, w2, pdf = _value(P, 0, 0, wo[i, 0], wo[i, 1], woz, wix, wiy, wiz,
-                                         e_u, e_v, tx, ty)
-                if pdf > 0.0:
-                    out[i, j] = w0
-    return out
-
-
-@njit
-def albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """Directional albedo ``tint E(wo)`` -> ``(a0, a1, a2)``, ``E`` read from this node's
-    table at ``T[t:]`` (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
-    ok, e_u, e_v, tx, ty, glossy, ms = _setup(P, row, b)
-    mu = abs(woz)
-    if not (ok and mu > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0
-    E = ms_albedo(T, t, False, max(P[row, b + _RU], kc.ROUGHNESS_MIN),
-                  max(P[row, b + _RV], kc.ROUGHNESS_MIN), 1.0, 1.0, tx, ty, wox, woy, woz)
-    a0, a1, a2 = P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
-    if ms:
-        a0 += P[row, b + _MS] * (1.0 - E)
-        a1 += P[row, b + _MS + 1] * (1.0 - E)
-        a2 += P[row, b + _MS + 2] * (1.0 - E)
-    return a0, a1, a2
+eval_pdf, sample, albedo, sample_weights = _glossy_lobe.kernels(__name__)
 
 
 def albedo_table(row, flags: int = 0) -> np.ndarray:
-    """The node table :func:`albedo` reads: a :func:`~render.df._albedo.node_table` for
-    one packed row (constant arguments), a :func:`~render.df._albedo.lanes_table` for
-    rows (``(rows, SIGNATURE.width)``) whose roughness differs (per-lane arguments)."""
-    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
-    ru = np.maximum(rows[:, _RU], kc.ROUGHNESS_MIN)
-    rv = np.maximum(rows[:, _RV], kc.ROUGHNESS_MIN)
-    if np.all(ru == ru[0]) and np.all(rv == rv[0]):
-        return node_table(BackscatteringGlossyReflectionBsdf, None, ru[0], rv[0])
-    return lanes_table(BackscatteringGlossyReflectionBsdf, None, ru, rv)
+    """The node table :func:`albedo` reads (:func:`render.df._albedo.glossy_albedo_table`:
+    per lane where the roughness differs)."""
+    return glossy_albedo_table(BackscatteringGlossyReflectionBsdf, row, flags)
+
 
 # --- the Python class ------------------------------------------------------------------
 

@@ -46,7 +46,8 @@ this df).
 
 from __future__ import annotations
 
-from render.df._layer import curve_estimates, curve_factors, curve_geometry, f82_curve1
+from render.df import _curve_layer
+from render.df._layer import curve_geometry, f82_curve1
 from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
 from render.df.thin_film import FILM_PARAMS, film_shift, schlick_ior
 from render.jit import njit
@@ -144,41 +145,12 @@ def _curve3(P, row, b, flags, woz, c):
 
 
 @njit
-def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """The layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats;
-    transmitted ``wi`` mirrored, no refraction half vector)."""
-    kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
-    h0, h1, h2 = _curve3(P, row, b, flags, woz, kh)
-    a0, a1, a2 = _curve3(P, row, b, flags, woz, nk1)
-    r0, r1, r2 = _curve3(P, row, b, flags, woz, nk2)
-    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+def _geometry(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """The curve's cosines (transmitted ``wi`` mirrored, no refraction half vector)."""
+    return curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
 
 
-@njit
-def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """The layer factors: ``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w
-    max(C(nk1), C(nk2), Ĉ(wo), Ĉ(wi)))`` per channel.
-
-    ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
-    curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
-    disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
-    ``wo`` or ``wi`` lies on different sides of the two tangent planes
-    (the layer frame's side test, the interpreter's mask).
-    """
-    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
-                                     wilx, wily, wilz)
-    return curve_factors(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2],
-                         h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2)
-
-
-@njit
-def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """The layer estimates: ``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
-    s = -1.0 if wolz < 0.0 else 1.0
-    c0, c1, c2 = _curve3(P, row, b, flags, woz, min(max(wolz * s, 0.0), 1.0))
-    return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
-                           P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
+layer_factors, layer_estimates, curve_h, curve_nk = _curve_layer.kernels(__name__)
 
 
 @njit
@@ -195,20 +167,6 @@ def layer_possible(P, row, b, flags):
             film and w > 0.0)
         white = white and w == 1.0
     return pos_l, not (white and curve_is_one(P, row, b, flags))
-
-
-@njit
-def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
-    """``C(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
-    and ``wi_L``): what the Ĉ quadrature integrates."""
-    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
-    return h0, h1, h2
-
-
-@njit
-def curve_nk(P, row, b, flags, vx, vy, vz):
-    """``C(|v.z|)`` (the control variate's curve), the context of ``v``'s side."""
-    return _curve3(P, row, b, flags, vz, abs(vz))
 
 
 @njit

@@ -40,9 +40,8 @@ Under ``thin_film`` the curve is the film's reflectance over the layer's IOR
 
 from __future__ import annotations
 
+from render.df import _curve_layer
 from render.df._layer import (
-    curve_estimates,
-    curve_factors,
     curve_geometry,
     fresnel_curve,
     fresnel_eta,
@@ -131,42 +130,13 @@ def _curve3(P, row, b, flags, woz, c):
 
 
 @njit
-def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """The layer's curves: ``C(|wo.h|)`` and ``max(C(nk1), C(nk2r))`` (6 floats)."""
-    kh, nk1, nk2r = curve_geometry(True, flags, P[row, b + _IOR_OUTSIDE],
-                                   P[row, b + _IOR_INSIDE], woz, wiz, ox, oy, oz, ix, iy, iz)
-    h0, h1, h2 = _curve3(P, row, b, flags, woz, kh)
-    a0, a1, a2 = _curve3(P, row, b, flags, woz, nk1)
-    r0, r1, r2 = _curve3(P, row, b, flags, woz, nk2r)
-    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+def _geometry(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """The curve's cosines, transmission through the refraction half vector."""
+    return curve_geometry(True, flags, P[row, b + _IOR_OUTSIDE], P[row, b + _IOR_INSIDE],
+                          woz, wiz, ox, oy, oz, ix, iy, iz)
 
 
-@njit
-def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """The layer factors: ``f_layer = w F(|wo.h|)``, ``f_base = max(0, 1 - w
-    max(F(nk1), F(nk2r), Ĉ(wo), Ĉ(wi)))`` per channel.
-
-    ``wo``, ``wi`` inherited frame; ``wo_l``, ``wi_l`` layer frame; ``co``, ``ci`` the
-    curve-weighted albedos ``Ĉ(wo)``, ``Ĉ(wi)`` (already 0 where a direction's frames
-    disagree, or where the node needs none).  Not applied here: ``f_layer = 0`` where
-    ``wo`` or ``wi`` lies on different sides of the two tangent planes
-    (the layer frame's side test, the interpreter's mask).
-    """
-    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
-                                     wilx, wily, wilz)
-    return curve_factors(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2],
-                         h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2)
-
-
-@njit
-def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """The layer estimates: ``w F(nk1)`` and ``max(0, 1 - w max(F(nk1), Ĉ(wo)))``."""
-    s = -1.0 if wolz < 0.0 else 1.0
-    nk1 = min(max(wolz * s, 0.0), 1.0)
-    c0, c1, c2 = _curve3(P, row, b, flags, woz, nk1)
-    return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
-                           P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
+layer_factors, layer_estimates, curve_h, curve_nk = _curve_layer.kernels(__name__)
 
 
 @njit
@@ -176,20 +146,6 @@ def layer_possible(P, row, b, flags):
     child exists and the frames agree."""
     w0, w1, w2 = P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2]
     return (w0 > 0.0 or w1 > 0.0 or w2 > 0.0), True
-
-
-@njit
-def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
-    """``F(|v.h|)`` for layer-frame ``v`` (as ``wo`` and ``wo_L``) and ``x`` (as ``wi``
-    and ``wi_L``): what the Ĉ quadrature integrates, the context of ``v``'s side."""
-    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
-    return h0, h1, h2
-
-
-@njit
-def curve_nk(P, row, b, flags, vx, vy, vz):
-    """``F(|v.z|)`` (the control variate's curve), the context of ``v``'s side."""
-    return _curve3(P, row, b, flags, vz, abs(vz))
 
 
 @njit

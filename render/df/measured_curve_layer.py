@@ -27,7 +27,8 @@ The curve is uniform: one array for every lane, packed after the node's slots
 
 from __future__ import annotations
 
-from render.df._layer import curve_estimates, curve_factors, curve_geometry, measured_curve1
+from render.df import _curve_layer
+from render.df._layer import curve_geometry, measured_curve1
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.program import O_MEASURED_CURVE_LAYER, df_class
@@ -67,8 +68,8 @@ _AT = COLOR_SIGNATURE.width  # the curve's colours follow the node's slots
 
 
 @njit
-def _curve3(P, row, b, c):
-    """``C(c)`` per channel."""
+def _curve3(P, row, b, flags, woz, c):
+    """``C(c)`` per channel (the same on either side)."""
     n = int(P[row, b + _N])
     at = b + _AT
     return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
@@ -76,33 +77,12 @@ def _curve3(P, row, b, c):
 
 
 @njit
-def _curves(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
-    """``C(|wo.h|)`` and ``max(C(nk1), C(nk2))`` (6 floats)."""
-    kh, nk1, nk2 = curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
-    h0, h1, h2 = _curve3(P, row, b, kh)
-    a0, a1, a2 = _curve3(P, row, b, nk1)
-    r0, r1, r2 = _curve3(P, row, b, nk2)
-    return h0, h1, h2, max(a0, r0), max(a1, r1), max(a2, r2)
+def _geometry(P, row, b, flags, woz, wiz, ox, oy, oz, ix, iy, iz):
+    """The curve's cosines (transmitted ``wi`` mirrored, no refraction half vector)."""
+    return curve_geometry(False, flags, 1.0, 1.0, woz, wiz, ox, oy, oz, ix, iy, iz)
 
 
-@njit
-def layer_factors(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                  wolx, woly, wolz, wilx, wily, wilz, co0, co1, co2, ci0, ci1, ci2):
-    """``f_layer = w C(|wo.h|)``, ``f_base = max(0, 1 - w max(C(nk1), C(nk2), Ĉ(wo),
-    Ĉ(wi)))`` per channel (the interpreter masks the layer where frames disagree)."""
-    h0, h1, h2, m0, m1, m2 = _curves(P, row, b, flags, woz, wiz, wolx, woly, wolz,
-                                     wilx, wily, wilz)
-    return curve_factors(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1], P[row, b + _WEIGHT + 2],
-                         h0, h1, h2, m0, m1, m2, co0, co1, co2, ci0, ci1, ci2)
-
-
-@njit
-def layer_estimates(P, row, b, flags, wox, woy, woz, wolx, woly, wolz, co0, co1, co2):
-    """``w C(nk1)`` and ``max(0, 1 - w max(C(nk1), Ĉ(wo)))``."""
-    s = -1.0 if wolz < 0.0 else 1.0
-    c0, c1, c2 = _curve3(P, row, b, min(max(wolz * s, 0.0), 1.0))
-    return curve_estimates(P[row, b + _WEIGHT], P[row, b + _WEIGHT + 1],
-                           P[row, b + _WEIGHT + 2], c0, c1, c2, co0, co1, co2)
+layer_factors, layer_estimates, curve_h, curve_nk = _curve_layer.kernels(__name__)
 
 
 @njit
@@ -120,19 +100,6 @@ def layer_possible(P, row, b, flags):
             pos_l = pos_l or w * v > 0.0
             one = one and v == 1.0 and w == 1.0
     return pos_l, not one
-
-
-@njit
-def curve_h(P, row, b, flags, vx, vy, vz, xx, xy, xz):
-    """``C(|v.h|)`` for layer-frame ``v`` and ``x`` (what the Ĉ table integrates)."""
-    h0, h1, h2, _, _, _ = _curves(P, row, b, flags, vz, xz, vx, vy, vz, xx, xy, xz)
-    return h0, h1, h2
-
-
-@njit
-def curve_nk(P, row, b, flags, vx, vy, vz):
-    """``C(|v.z|)`` (the control variate's curve)."""
-    return _curve3(P, row, b, abs(vz))
 
 
 @njit

@@ -25,10 +25,10 @@ total internal reflection), dielectric Fresnel on the renderer's IOR pair in
 = 1`` to the albedo table's accuracy).
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
-and :func:`albedo` are the generic microfacet kernels of :mod:`render.df._microfacet`
-with this df's distribution and masking; ``eval_pdf``, ``sample`` and ``albedo`` read
-the node's albedo table (``T``, ``t``: :func:`albedo_table`), which holds ``E`` and
-``E_avg`` for the compensation.
+and :func:`albedo` are the glossy-lobe kernels of :mod:`render.df._glossy_lobe` over the
+microfacet lobe of :mod:`render.df._microfacet` with this df's distribution and masking;
+``eval_pdf``, ``sample`` and ``albedo`` read the node's albedo table (``T``, ``t``:
+:func:`albedo_table`), which holds ``E`` and ``E_avg`` for the compensation.
 
 Departures from libbsdf: the refraction pdf includes the ``eta2^2``
 Jacobian (see ``_microfacet``).
@@ -39,14 +39,15 @@ References: Cook & Torrance (1982); Walter et al. (2007); Heitz & d'Eon (2014).
 from __future__ import annotations
 
 from render.bsdf import Lobe
+from render.df import _glossy_lobe
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     BECKMANN,
     VCAVITIES,
-    mf_albedo,
-    mf_eval_pdf,
-    mf_sample,
-    mf_sample_weights,
+    mf_ms_lobe,
+    mf_setup,
+    mf_single_sample,
+    mf_value,
     microfacet_signature,
 )
 from render.jit import njit
@@ -64,33 +65,19 @@ __all__ = [
 
 # --- signature and kernels (the compiled render core) ---------------------------------------
 SIGNATURE = microfacet_signature()
-_DIST, _MASK = BECKMANN, VCAVITIES
+_TINT = SIGNATURE.offset("tint")
 
 
 @njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
-    return mf_eval_pdf(_DIST, _MASK, P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t)
+def _setup(P, row, b, flags, flip):
+    """The lane's setup (:func:`render.df._microfacet.mf_setup`) with this df's
+    distribution and masking."""
+    return mf_setup(BECKMANN, VCAVITIES, P, row, b, flags, flip)
 
 
-@njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    return mf_sample(_DIST, _MASK, P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t)
-
-
-@njit
-def albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """Directional albedo ``tint E(wo)`` (plus the compensation's ``multiscatter_tint
-    (1 - E(wo))``) -> ``(a0, a1, a2)``."""
-    return mf_albedo(P, row, b, flags, wox, woy, woz, T, t)
-
-
-@njit(allocates=True)
-def sample_weights(P, flags, wo, pts):
-    """The albedo tables' Monte Carlo (:mod:`render.df._albedo`): single-scattering
-    sample weights (m, k) for each ``wo`` and variates ``pts``."""
-    return mf_sample_weights(_DIST, _MASK, P, flags, wo, pts)
+# the lobe the kernels of render.df._glossy_lobe read
+_value, _single_sample, _ms_lobe = mf_value, mf_single_sample, mf_ms_lobe
+eval_pdf, sample, albedo, sample_weights = _glossy_lobe.kernels(__name__)
 
 
 def albedo_table(row, flags: int):
@@ -102,8 +89,7 @@ def albedo_table(row, flags: int):
 
 MicrofacetBeckmannVcavitiesBsdf = df_class(
     "MicrofacetBeckmannVcavitiesBsdf", "microfacet_beckmann_vcavities_bsdf",
-    O_MICROFACET_BECKMANN_VCAVITIES,
-    SIGNATURE,
+    O_MICROFACET_BECKMANN_VCAVITIES, SIGNATURE,
     {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
      "scatter_reflect_transmit": Lobe.GLOSSY},
     albedo_table=albedo_table, module=__name__)

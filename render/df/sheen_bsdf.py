@@ -36,18 +36,16 @@ import math
 import numpy as np
 
 from render.bsdf import Lobe
+from render.df import _glossy_lobe
 from render.df import _kernel_common as kc
-from render.df._albedo import lanes_table, node_table
+from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     mf_finish,
     mf_geometry,
     mf_sample_dir,
     ms_albedo,
-    ms_choice,
-    ms_eval,
     ms_lobe,
     ms_on,
-    ms_sampled,
 )
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
@@ -86,13 +84,13 @@ _TWO_PI = 2.0 * math.pi
 
 
 @njit
-def _setup(P, row, b):
-    """``(ok, q, glossy, ms)`` of one lane."""
+def _setup(P, row, b, flags, flip):
+    """The lane's setup (:mod:`render.df._glossy_lobe`): ``s = (q,)``."""
     q = 1.0 / max(P[row, b + _R], kc.ROUGHNESS_MIN)
     glossy = not (P[row, b + _TINT] == 0.0 and P[row, b + _TINT + 1] == 0.0
                   and P[row, b + _TINT + 2] == 0.0)
     ms = ms_on(0, P[row, b + _MS], P[row, b + _MS + 1], P[row, b + _MS + 2])
-    return glossy or ms, q, glossy, ms
+    return glossy or ms, glossy, ms, False, (q,)
 
 
 @njit
@@ -105,7 +103,9 @@ def _d(q, hz):
 
 
 @njit
-def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, q):
+def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, s):
+    """The sheen lobe at an oriented pair -> ``(w0, w1, w2, pdf)``."""
+    q = s[0]
     ok, refr, hx, hy, hz, kh1, kh2, p_ev, g1_1, g2 = mf_geometry(
         0, 1.0, 1.0, wox, woy, woz, wix, wiy, wiz)
     if not ok:
@@ -115,7 +115,10 @@ def _value(P, row, b, wox, woy, woz, wix, wiy, wiz, q):
 
 
 @njit
-def _single_sample(wox, woy, woz, u1, u2x, u2y, q):
+def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, s):
+    """A half vector from ``D (n.h)`` (``sin theta_h = (1 - u)^(1/(q+2))``), then the
+    v-cavities flip -> ``(ok, wix, wiy, wiz)``."""
+    q = s[0]
     phi = _TWO_PI * u2x
     sin_t = math.exp(math.log1p(-u2y) / (q + 2.0))
     cos_t = math.sqrt(max(1.0 - sin_t * sin_t, 0.0))
@@ -124,79 +127,13 @@ def _single_sample(wox, woy, woz, u1, u2x, u2y, q):
 
 
 @njit
-def _ms_lobe(P, row, b, glossy):
+def _ms_lobe(P, row, b, s, glossy):
     """:func:`ms_lobe` of a lane (isotropic: any tangent)."""
     r = P[row, b + _R]
     return ms_lobe(P, row, b + _MS, r, r, 1.0, 1.0, 1.0, 0.0, glossy)
 
 
-@njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``."""
-    if woz < 0.0:
-        woz = -woz
-        wiz = -wiz
-    ok, q, glossy, ms = _setup(P, row, b)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0
-    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, q)
-    if not ms:
-        return w0 * pdf, w1 * pdf, w2 * pdf, pdf
-    if not woz > kc.COS_ZERO:
-        return 0.0, 0.0, 0.0, 0.0
-    return ms_eval(T, t, False, _ms_lobe(P, row, b, glossy), wox, woy, woz, wix, wiy, wiz,
-                   w0 * pdf, w1 * pdf, w2 * pdf, pdf)
-
-
-@njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u1 = kc.clamp_u(u1)
-    u2x = kc.clamp_u(u2x)
-    u2y = kc.clamp_u(u2y)
-    flip = woz < 0.0
-    if flip:
-        woz = -woz
-    ok, q, glossy, ms = _setup(P, row, b)
-    if not (ok and woz > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    single = True
-    c = _ms_lobe(P, row, b, glossy)
-    if ms:
-        single, u1 = ms_choice(T, t, False, c, wox, woy, woz, u1)
-    if single:
-        ok, wix, wiy, wiz = _single_sample(wox, woy, woz, u1, u2x, u2y, q)
-        if not ok:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    else:
-        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
-    w0, w1, w2, pdf = _value(P, row, b, wox, woy, woz, wix, wiy, wiz, q)
-    if ms:
-        w0, w1, w2, pdf = ms_sampled(T, t, False, c, single, wox, woy, woz, wix, wiy, wiz,
-                                     w0, w1, w2, pdf)
-    if not pdf > 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    if flip:
-        wiz = -wiz
-    return wix, wiy, wiz, pdf, w0, w1, w2, _GLOSSY_R
-
-
-@njit(allocates=True)
-def sample_weights(P, flags, wo, pts):
-    """The albedo tables' Monte Carlo: first-channel single-scattering sample weights."""
-    m, k = wo.shape[0], pts.shape[0]
-    out = np.zeros((m, k))
-    q = 1.0 / max(P[0, _R], kc.ROUGHNESS_MIN)
-    for i in range(m):
-        woz = abs(wo[i, 2])
-        for j in range(k):
-            good, wix, wiy, wiz = _single_sample(wo[i, 0], wo[i, 1], woz, kc.clamp_u(pts[j, 0]),
-                                                 kc.clamp_u(pts[j, 1]), kc.clamp_u(pts[j, 2]), q)
-            if good:
-                w0, w1, w2, pdf = _value(P, 0, 0, wo[i, 0], wo[i, 1], woz, wix, wiy, wiz, q)
-                if pdf > 0.0:
-                    out[i, j] = w0
-    return out
+eval_pdf, sample, albedo, sample_weights = _glossy_lobe.kernels(__name__)
 
 
 @njit
@@ -208,28 +145,10 @@ def white_albedo(P, row, b, ox, oy, oz, T, t):
     return ms_albedo(T, t, False, r, r, 1.0, 1.0, 1.0, 0.0, ox, oy, oz)
 
 
-@njit
-def albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """``tint E(wo)`` (plus ``multiscatter_tint (1 - E(wo))``) from the node's table."""
-    ok, q, glossy, ms = _setup(P, row, b)
-    if not (ok and abs(woz) > kc.COS_ZERO):
-        return 0.0, 0.0, 0.0
-    E = white_albedo(P, row, b, wox, woy, woz, T, t)
-    a0, a1, a2 = P[row, b + _TINT] * E, P[row, b + _TINT + 1] * E, P[row, b + _TINT + 2] * E
-    if ms:
-        a0 += P[row, b + _MS] * (1.0 - E)
-        a1 += P[row, b + _MS + 1] * (1.0 - E)
-        a2 += P[row, b + _MS + 2] * (1.0 - E)
-    return a0, a1, a2
-
-
 def albedo_table(row, flags: int = 0) -> np.ndarray:
-    """The sheen lobe's node table (per lane where the roughness differs)."""
-    rows = np.atleast_2d(np.asarray(row, dtype=np.float64))
-    r = np.maximum(rows[:, _R], kc.ROUGHNESS_MIN)
-    if np.all(r == r[0]):
-        return node_table(_SheenLobe, None, r[0], r[0])
-    return lanes_table(_SheenLobe, None, r, r)
+    """The sheen lobe's node table (:func:`render.df._albedo.glossy_albedo_table`: per lane
+    where the roughness differs)."""
+    return glossy_albedo_table(_SheenLobe, row, flags)
 
 
 # --- the layer over a multiscatter bsdf that is not the default --------------------------

@@ -33,8 +33,9 @@ Departures from libbsdf:
   (:mod:`render.df._microfacet`), from this lobe's own albedo table.
 
 Compiled kernels (the render core): :data:`SIGNATURE`, :func:`eval_pdf`, :func:`sample`
-and :func:`albedo` below, one lane at a time.  All three take two arguments beyond the
-kernel contract, the program's table array ``T`` and this node's offset ``t`` in it,
+and :func:`albedo`, one lane at a time: the glossy-lobe kernels of
+:mod:`render.df._glossy_lobe` over this module's lobe.  All three take two arguments beyond
+the kernel contract, the program's table array ``T`` and this node's offset ``t`` in it,
 filled by :func:`albedo_table` (see :mod:`render.df._albedo` for why the tables are not
 frozen into the kernel): the albedo and the compensation lobe read it.
 
@@ -50,23 +51,20 @@ import math
 import numpy as np
 
 from render.bsdf import Lobe
+from render.df import _glossy_lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
-    mf_albedo,
     mf_film_event,
     mf_film_on,
     mf_finish,
     mf_geometry,
     mf_sample_dir,
     microfacet_signature,
-    ms_choice,
-    ms_eval,
     ms_lobe,
     ms_on,
-    ms_sampled,
 )
-from render.df._signature import MODE_MASK, REFLECT, THIN_WALLED
+from render.df._signature import MODE_MASK, THIN_WALLED
 from render.jit import njit
 from render.program import O_SIMPLE_GLOSSY, df_class
 
@@ -94,9 +92,7 @@ _IOR_IN = SIGNATURE.offset("ior_inside")
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
-_GLOSSY_R = int(Lobe.GLOSSY_REFLECTION)
-_GLOSSY_T = int(Lobe.GLOSSY_TRANSMISSION)
-_MODE_MASK_, _REFLECT_, _THIN_ = MODE_MASK, REFLECT, THIN_WALLED
+_MODE_MASK_, _THIN_ = MODE_MASK, THIN_WALLED
 
 
 @njit
@@ -153,7 +149,8 @@ def as_sample(e_u, e_v, u0, u1):
 
 @njit
 def _setup(P, row, b, flags, flip):
-    """the lane's setup -> ``(ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms)``."""
+    """The lane's setup (:mod:`render.df._glossy_lobe`): ``s = (e_u, e_v, norm, tx, ty,
+    eta1, eta2)``."""
     e_u, e_v, norm = as_exponents(P[row, b + _RU], P[row, b + _RV])
     tx, ty, ok = kc.tangent_axes(P[row, b + _TANGENT], P[row, b + _TANGENT + 1],
                                 P[row, b + _TANGENT + 2])
@@ -167,12 +164,13 @@ def _setup(P, row, b, flags, flip):
     if not (o > 0.0 and i > 0.0):
         ok = False  # not an IOR (the packer refuses it)
     eta1, eta2 = kc.ior_pair(o, i, flip, (flags & _THIN_) != 0, True)
-    return ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms
+    return ok, glossy, ms, flip, (e_u, e_v, norm, tx, ty, eta1, eta2)
 
 
 @njit
-def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, ty, eta1, eta2):
+def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, s):
     """the microfacet evaluation for an oriented lane -> ``(w0, w1, w2, pdf)``."""
+    e_u, e_v, norm, tx, ty, eta1, eta2 = s
     ok, refr, hx, hy, hz, kh1, kh2, p_ev, g1_1, g2 = mf_geometry(
         flags, eta1, eta2, wox, woy, woz, wix, wiy, wiz)
     if not ok:
@@ -194,36 +192,17 @@ def _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, e_u, e_v, norm, tx, t
 
 
 @njit
-def _ms_lobe(P, row, b, tx, ty, glossy):
+def _ms_lobe(P, row, b, s, glossy):
     """:func:`ms_lobe` of a lane (the table's roughness: the parameters, not exponents)."""
+    e_u, e_v, norm, tx, ty, eta1, eta2 = s
     return ms_lobe(P, row, b + _MS, P[row, b + _RU], P[row, b + _RV], P[row, b + _IOR_OUT],
                    P[row, b + _IOR_IN], tx, ty, glossy)
 
 
 @njit
-def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz, T, t):
-    """``f |cos theta_i|`` and the pdf of :func:`sample` -> ``(f0, f1, f2, pdf)``
-    (``T``, ``t``: the node's albedo table, read by the compensation lobe)."""
-    flip = woz < 0.0
-    if flip:  # orient: mirror both through the tangent plane
-        woz = -woz
-        wiz = -wiz
-    ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0
-    w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                             e_u, e_v, norm, tx, ty, eta1, eta2)
-    if not ms:
-        return w0 * pdf, w1 * pdf, w2 * pdf, pdf
-    if not woz > kc.COS_ZERO:
-        return 0.0, 0.0, 0.0, 0.0
-    return ms_eval(T, t, flip, _ms_lobe(P, row, b, tx, ty, glossy), wox, woy, woz,
-                   wix, wiy, wiz, w0 * pdf, w1 * pdf, w2 * pdf, pdf)
-
-
-@njit
-def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, e_u, e_v, tx, ty, eta1, eta2):
+def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, s):
     """half vector from D (n.h), in the anisotropy frame, then into the local frame."""
+    e_u, e_v, norm, tx, ty, eta1, eta2 = s
     ht, hb, hn = as_sample(e_u, e_v, u2x, u2y)
     return mf_sample_dir(flags, eta1, eta2, wox, woy, woz,
                          ht * tx + hb * ty, ht * ty - hb * tx, hn, u1, True,
@@ -231,76 +210,7 @@ def _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, e_u, e_v, tx, 
                          P[row, b + _FILM_N + 2])
 
 
-@njit
-def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, T, t):
-    """-> ``(wix, wiy, wiz, pdf, w0, w1, w2, lobe)`` (all 0 where the sample fails)."""
-    u1 = kc.clamp_u(u1)
-    u2x = kc.clamp_u(u2x)
-    u2y = kc.clamp_u(u2y)
-    flip = woz < 0.0
-    if flip:
-        woz = -woz
-    ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, row, b, flags, flip)
-    if not ok:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    single = True
-    c = _ms_lobe(P, row, b, tx, ty, glossy)
-    if ms:
-        if not woz > kc.COS_ZERO:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-        single, u1 = ms_choice(T, t, flip, c, wox, woy, woz, u1)
-    if single:
-        ok, wix, wiy, wiz = _single_sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y,
-                                           e_u, e_v, tx, ty, eta1, eta2)
-        if not ok:
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    else:
-        wix, wiy, wiz = kc.cosine_hemisphere(u2x, u2y)
-    w0, w1, w2, pdf = _value(P, row, b, flags, wox, woy, woz, wix, wiy, wiz,
-                             e_u, e_v, norm, tx, ty, eta1, eta2)
-    if ms:
-        w0, w1, w2, pdf = ms_sampled(T, t, flip, c, single, wox, woy, woz, wix, wiy, wiz,
-                                     w0, w1, w2, pdf)
-    if not pdf > 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    lobe = _GLOSSY_T if wiz < 0.0 else _GLOSSY_R
-    if flip:
-        wiz = -wiz
-    return wix, wiy, wiz, pdf, w0, w1, w2, lobe
-
-
-@njit(allocates=True)
-def sample_weights(P, flags, wo, pts):
-    """First-channel single-scattering sample weights (m, k) on row 0 of ``P`` for each
-    ``wo`` (m, 3) and variates ``pts`` (k, 3): the albedo tables' Monte Carlo
-    (:mod:`render.df._albedo`)."""
-    m, k = wo.shape[0], pts.shape[0]
-    out = np.zeros((m, k))
-    for i in range(m):
-        flip = wo[i, 2] < 0.0
-        woz = abs(wo[i, 2])
-        ok, e_u, e_v, norm, tx, ty, eta1, eta2, glossy, ms = _setup(P, 0, 0, flags, flip)
-        if not ok:
-            continue
-        for j in range(k):
-            good, wix, wiy, wiz = _single_sample(P, 0, 0, flags, wo[i, 0], wo[i, 1], woz,
-                                                 kc.clamp_u(pts[j, 0]), kc.clamp_u(pts[j, 1]),
-                                                 kc.clamp_u(pts[j, 2]), e_u, e_v, tx, ty,
-                                                 eta1, eta2)
-            if good:
-                w0, w1, w2, pdf = _value(P, 0, 0, flags, wo[i, 0], wo[i, 1], woz, wix, wiy,
-                                         wiz, e_u, e_v, norm, tx, ty, eta1, eta2)
-                if pdf > 0.0:
-                    out[i, j] = w0
-    return out
-
-
-@njit
-def albedo(P, row, b, flags, wox, woy, woz, T, t):
-    """Directional albedo ``tint E(wo)`` (plus ``multiscatter_tint (1 - E(wo))`` where the
-    compensation is on) -> ``(a0, a1, a2)``, ``E`` read from this node's table at ``T[t:]``
-    (:func:`render.df._albedo.node_table`, built by :func:`albedo_table`)."""
-    return mf_albedo(P, row, b, flags, wox, woy, woz, T, t)
+eval_pdf, sample, albedo, sample_weights = _glossy_lobe.kernels(__name__)
 
 
 def albedo_table(row, flags: int) -> np.ndarray:

@@ -98,6 +98,57 @@ def test_plain_numba_cache_runs_the_stale_callee(tmp_path):
     assert stale["hits"] == 1 and stale["value"] == 4.0
 
 
+TEMPLATE = """\
+part = None  # bound per instance
+
+
+def kernel(x):
+    return 2.0 * part(x)
+"""
+
+INSTANCE = """\
+from render import _probe_template
+from render.jit import instantiate, njit
+
+
+@njit
+def part(x):
+    return x + {offset}
+
+
+kernel = instantiate(_probe_template.kernel, __name__, part=part)
+"""
+
+RUN_INSTANCES = textwrap.dedent("""\
+    import json
+    from render import _probe_one, _probe_two
+    ks = (_probe_one.kernel, _probe_two.kernel)
+    print(json.dumps({"values": [k(1.0) for k in ks],
+                      "hits": [sum(k.stats.cache_hits.values()) for k in ks],
+                      "misses": [sum(k.stats.cache_misses.values()) for k in ks]}))
+""")
+
+
+def test_instances_of_one_template_are_cached_apart(tmp_path, render_copy):
+    """:func:`render.jit.instantiate`: two instances share the template's file and line,
+    yet a warm cache gives each its own machine code (keyed by module), and is used."""
+    for name, offset in (("one", "1.0"), ("two", "2.0")):
+        (render_copy / "render" / f"_probe_{name}.py").write_text(INSTANCE.format(offset=offset))
+    (render_copy / "render" / "_probe_template.py").write_text(TEMPLATE)
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHONPATH": str(render_copy),
+           "PWC_CACHE_DIR": str(tmp_path / "cache")}
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", RUN_INSTANCES], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stderr
+        return json.loads(r.stdout.strip().splitlines()[-1])
+
+    cold, warm = run(), run()
+    assert cold["values"] == [4.0, 6.0] and cold["misses"] == [1, 1]
+    assert warm["values"] == [4.0, 6.0] and warm["hits"] == [1, 1]
+
+
 def test_a_kernel_compiles_once_whatever_literal_values_it_is_called_with():
     """numba types ``f(x, 0)`` and ``f(x, False)`` with literal types and compiles ``f``
     once per value; render.jit's dispatcher compiles once per argument types (the cold
