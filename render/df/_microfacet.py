@@ -82,7 +82,8 @@ from render.jit import njit
 
 __all__ = ["mf_p_reflect", "mf_half", "mf_vcavities", "mf_geometry", "mf_finish",
            "mf_sample_dir", "GGX", "BECKMANN", "VCAVITIES", "SMITH", "mf_d", "mf_smith_g1",
-           "mf_sample_d_cos", "mf_sample_visible", "mf_setup", "mf_value", "mf_single_sample",
+           "mf_sample_d_cos", "mf_sample_visible", "ASHIKHMIN_SHIRLEY", "as_exponents", "as_d_cos",
+           "as_azimuth", "as_sample", "mf_setup", "mf_value", "mf_single_sample",
            "mf_ms_lobe", "ms_lobe", "ms_eval", "ms_choice", "ms_sampled", "ms_on", "ms_albedo",
            "microfacet_signature", "mf_film_event", "mf_film_on"]
 
@@ -273,23 +274,82 @@ def mf_sample_dir(flags, eta1, eta2, wox, woy, woz, hx, hy, hz, u1, vflip, d, f0
     return True, wix, wiy, wiz
 
 
-# --- normal distributions and Smith masking (the microfacet_* dfs) -------------------------
-#: ``dist`` of the generic kernels: the normal distribution
-GGX, BECKMANN = 0, 1
+# --- normal distributions and Smith masking (the microfacet_* dfs, simple_glossy_bsdf) ----
+#: ``dist`` of the generic kernels: the normal distribution (Ashikhmin–Shirley's is
+#: ``simple_glossy_bsdf``'s, with v-cavities masking only)
+GGX, BECKMANN, ASHIKHMIN_SHIRLEY = 0, 1, 2
 #: ``mask`` of the generic kernels: the masking-shadowing model
 VCAVITIES, SMITH = 0, 1
 _PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_HALF_PI = 0.5 * math.pi
 _INV_SQRT_PI = 1.0 / math.sqrt(math.pi)
 _TWO_OVER_SQRT_PI = 2.0 / math.sqrt(math.pi)
+
+
+@njit
+def as_exponents(ru, rv):
+    """Ashikhmin–Shirley's exponents: ``(e_u, e_v, norm)`` (roughness clamped at 1e-7)."""
+    ru = max(ru, kc.ROUGHNESS_MIN)
+    rv = max(rv, kc.ROUGHNESS_MIN)
+    e_u = 2.0 / (ru * ru)
+    e_v = 2.0 / (rv * rv)
+    return e_u, e_v, math.sqrt((e_u + 1.0) * (e_v + 1.0)) / _TWO_PI
+
+
+@njit
+def as_d_cos(e_u, e_v, norm, ht, hb, hn):
+    """Ashikhmin–Shirley's density: ``D(h) (n.h)`` in the anisotropy frame."""
+    s2 = ht * ht + hb * hb
+    if not (hn > 0.0 and s2 < 1.0):
+        return 0.0
+    # (n.h)^(x) = exp(x/2 * log(1 - s2)); x s2 = e_u ht^2 + e_v hb^2 stays finite as s2 -> 0
+    ratio = math.log1p(-s2) / s2 if s2 > 0.0 else -1.0
+    expo = 0.5 * (e_u * ht * ht + e_v * hb * hb) * ratio
+    return norm * math.exp(expo)
+
+
+@njit
+def as_azimuth(e_u, e_v, u):
+    """The anisotropic Phong azimuth: quadrant from ``u``, then
+    ``tan(phi) = sqrt((e_u+1)/(e_v+1)) tan(pi u'/2)`` -> ``(cos phi, sin phi)``."""
+    q = math.floor(4.0 * u)
+    half = _HALF_PI * (4.0 * u - q)
+    phi0 = math.atan2(math.sqrt(e_u + 1.0) * math.sin(half), math.sqrt(e_v + 1.0) * math.cos(half))
+    if q == 0.0:
+        phi = phi0
+    elif q == 1.0:
+        phi = _PI - phi0
+    elif q == 2.0:
+        phi = _PI + phi0
+    else:
+        phi = _TWO_PI - phi0
+    return math.cos(phi), math.sin(phi)
+
+
+@njit
+def as_sample(e_u, e_v, u0, u1):
+    """Ashikhmin–Shirley sampling: a half vector ``(ht, hb, hn)`` with density ``D (n.h)``."""
+    cp, sp = as_azimuth(e_u, e_v, u0)
+    e = e_u * cp * cp + e_v * sp * sp
+    # cos theta = (1 - u1)^(1/(e+1)); keep 1 - cos accurate for huge exponents
+    one_minus_cos = -math.expm1(math.log1p(-u1) / (e + 1.0))
+    cos_t = 1.0 - one_minus_cos
+    sin_t = math.sqrt(max(one_minus_cos * (2.0 - one_minus_cos), 0.0))
+    return sin_t * cp, sin_t * sp, cos_t
 
 
 @njit
 def mf_d(dist, au, av, ht, hb, hn):
     """``D(h)`` in the anisotropy frame (``alpha_u`` along ``t``): GGX
     ``1 / (pi au av (ht^2/au^2 + hb^2/av^2 + hn^2)^2)``, Beckmann
-    ``exp(-(ht^2/au^2 + hb^2/av^2) / hn^2) / (pi au av hn^4)``; 0 for ``hn <= 0``."""
+    ``exp(-(ht^2/au^2 + hb^2/av^2) / hn^2) / (pi au av hn^4)``, Ashikhmin–Shirley
+    :func:`as_d_cos` ``/ hn`` (exponents ``2 / alpha^2``); 0 for ``hn <= 0``."""
     if not hn > 0.0:
         return 0.0
+    if dist == ASHIKHMIN_SHIRLEY:
+        e_u, e_v, norm = as_exponents(au, av)
+        return as_d_cos(e_u, e_v, norm, ht, hb, hn) / hn
     x = ht / au
     y = hb / av
     if dist == GGX:
@@ -303,7 +363,7 @@ def mf_d(dist, au, av, ht, hb, hn):
 def mf_lambda(dist, au, av, kt, kb, kn):
     """Smith's ``Lambda(k)`` for a direction with ``|k.n| = kn`` (anisotropic: the
     roughness projected on ``k``'s azimuth).  GGX in a form without cancellation; Beckmann
-    exact (``erfc``), not Walter's rational fit."""
+    exact (``erfc``), not Walter's rational fit (Ashikhmin–Shirley has v-cavities only)."""
     kn = abs(kn)
     a2 = (au * kt) * (au * kt) + (av * kb) * (av * kb)  # tan^2 theta alpha^2, times kn^2
     if not a2 > 0.0:
@@ -333,7 +393,10 @@ def mf_sample_d_cos(dist, au, av, u0, u1):
     """A half vector ``(ht, hb, hn)`` with density ``D(h) (n.h)``: the azimuth from
     ``tan phi = (av/au) tan(2 pi u0)``, then ``tan^2 theta`` from the inverted marginal
     (GGX ``u1 / ((1 - u1) k)``, Beckmann ``-log(1 - u1) / k``, ``k = cos^2 phi / au^2 +
-    sin^2 phi / av^2``)."""
+    sin^2 phi / av^2``); Ashikhmin–Shirley's from :func:`as_sample`."""
+    if dist == ASHIKHMIN_SHIRLEY:
+        e_u, e_v, norm = as_exponents(au, av)
+        return as_sample(e_u, e_v, u0, u1)
     phi = 2.0 * _PI * u0
     cx = au * math.cos(phi)
     cy = av * math.sin(phi)

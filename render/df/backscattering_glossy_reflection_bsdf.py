@@ -44,9 +44,8 @@ from render.bsdf import (
 from render.df import _glossy_lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import glossy_albedo_table
-from render.df._microfacet import ms_lobe, ms_on
+from render.df._microfacet import as_azimuth, ms_lobe, ms_on
 from render.df._signature import REQUIRED, Param, Signature
-from render.df.simple_glossy_bsdf import as_azimuth
 from render.jit import njit
 from render.program import O_BACKSCATTERING_GLOSSY, df_class
 

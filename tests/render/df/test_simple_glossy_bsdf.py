@@ -21,7 +21,7 @@ from render_df_cases import (
 
 from render.bsdf import Lobe
 from render.df import simple_glossy_bsdf
-from render.df.simple_glossy_bsdf import as_d_cos, as_exponents
+from render.df._microfacet import as_d_cos, as_exponents
 from render.testing import direction, sample_lanes, sphere_integral
 
 RT, TR = "scatter_reflect_transmit", "scatter_transmit"
