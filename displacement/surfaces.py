@@ -26,11 +26,12 @@ Nothing returns NaN: poles, seams and degenerate uv triangles have defined frame
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-import trimesh
 
+if TYPE_CHECKING:  # imported where a mesh is made: trimesh costs 0.45 s to import
+    import trimesh
 from displacement.state import ShadingState
 
 __all__ = [
@@ -98,6 +99,8 @@ def _any_perpendicular(n: np.ndarray) -> np.ndarray:
 
 def _texture_mesh(vertices, faces, uv, normals) -> trimesh.Trimesh:
     """A trimesh with vertex uv and normals, vertices kept as given (no merging)."""
+    import trimesh
+
     return trimesh.Trimesh(
         vertices=vertices,
         faces=faces,
@@ -153,31 +156,46 @@ class ParametricSurface:
     is_mesh: bool = False
     #: fewest grid cells in u and v for a mesh that is not degenerate
     _min_resolution: tuple[int, int] = (1, 1)
+    #: grid cells in u and v of a base mesh when none are given
+    resolution: tuple[int, int] = (1, 1)
 
     def state_at_uv(self, uv: np.ndarray) -> ShadingState:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def base_mesh(self, nu: int, nv: int) -> trimesh.Trimesh:
-        """A triangle mesh of the surface on an nu x nv uv grid.
+    def base_grid(self, nu: int | None = None, nv: int | None = None):
+        """The uv points and triangles of :meth:`base_mesh`, without evaluating the surface
+        or making a mesh (the renderer's path: trimesh alone takes 0.45 s to import).
 
         Parameters
         ----------
-        nu, nv : int
-            Cells in u and v.
+        nu, nv : int, optional
+            Cells in u and v (default: ``resolution``).
+
+        Returns
+        -------
+        uv : (n, 2) float64
+        faces : (m, 3) int64
+            Triangles wound counter-clockwise seen from the normal side.
+        """
+        nu, nv = _check_resolution(self.resolution[0] if nu is None else nu,
+                                   self.resolution[1] if nv is None else nv,
+                                   *self._min_resolution, type(self).__name__)
+        u, v = np.meshgrid(np.arange(nu + 1) / nu, np.arange(nv + 1) / nv, indexing="xy")
+        return np.stack([u.ravel(), v.ravel()], axis=1), _grid_faces(nu, nv)
+
+    def base_mesh(self, nu: int | None = None, nv: int | None = None) -> trimesh.Trimesh:
+        """A triangle mesh of the surface on an nu x nv uv grid (default: ``resolution``).
 
         Returns
         -------
         trimesh.Trimesh
-            ``(nu + 1) (nv + 1)`` vertices with uv in ``mesh.visual.uv`` and the
-            analytic normals as vertex normals, ``2 nu nv`` triangles wound
-            counter-clockwise seen from the normal side.  Not processed: seam vertices
-            stay duplicated.
+            The :meth:`base_grid` (on a plain grid ``(nu + 1) (nv + 1)`` vertices and
+            ``2 nu nv`` triangles) with uv in ``mesh.visual.uv`` and the analytic normals
+            as vertex normals.  Not processed: seam vertices stay duplicated.
         """
-        nu, nv = _check_resolution(nu, nv, *self._min_resolution, type(self).__name__)
-        u, v = np.meshgrid(np.arange(nu + 1) / nu, np.arange(nv + 1) / nv, indexing="xy")
-        uv = np.stack([u.ravel(), v.ravel()], axis=1)
+        uv, faces = self.base_grid(nu, nv)
         state = self.state_at_uv(uv)
-        return _texture_mesh(state.position, _grid_faces(nu, nv), uv, state.normal)
+        return _texture_mesh(state.position, faces, uv, state.normal)
 
 
 class Plane(ParametricSurface):
@@ -251,12 +269,6 @@ class Plane(ParametricSurface):
             tangent_v=np.broadcast_to(self.axis_v, (n, 3)).copy(),
         )
 
-    def base_mesh(self, nu: int | None = None, nv: int | None = None) -> trimesh.Trimesh:
-        """The plane as ``nu x nv`` cells (default: ``resolution``)."""
-        return super().base_mesh(
-            self.resolution[0] if nu is None else nu, self.resolution[1] if nv is None else nv
-        )
-
 
 class UVSphere(ParametricSurface):
     """A sphere about the origin: u around +y (longitude), v from pole to pole.
@@ -287,6 +299,7 @@ class UVSphere(ParametricSurface):
     periodic_u = True
     periodic_v = False
     _min_resolution = (3, 2)
+    resolution = (32, 16)
 
     def __init__(self, radius: float = 1.0):
         self.radius = _positive(radius, "UVSphere radius")
@@ -308,19 +321,18 @@ class UVSphere(ParametricSurface):
         tangent_v = np.stack([-sin_phi * cos_t, cos_phi, sin_phi * sin_t], axis=1)
         return ShadingState(self.radius * normal, normal, uv, tangent_u, tangent_v)
 
-    def base_mesh(self, nu: int = 32, nv: int = 16) -> trimesh.Trimesh:
-        """The sphere as nu segments and nv rings of cells, the poles as triangle fans.
+    def base_grid(self, nu: int | None = None, nv: int | None = None):
+        """The sphere as nu segments and nv rings of cells, the poles as triangle fans
+        (:meth:`ParametricSurface.base_grid`; default 32 x 16).
 
         Each pole is ``nu`` vertices at the same position, the i-th with
         u = (i + 1/2) / nu, so every fan triangle has continuous uv (and no triangle is
-        degenerate); the seam column u = 1 duplicates u = 0.
-
-        Returns
-        -------
-        trimesh.Trimesh
-            ``2 nu + (nv - 1)(nu + 1)`` vertices, ``2 nu (nv - 1)`` triangles.
+        degenerate); the seam column u = 1 duplicates u = 0: ``2 nu + (nv - 1)(nu + 1)``
+        vertices, ``2 nu (nv - 1)`` triangles.
         """
-        nu, nv = _check_resolution(nu, nv, *self._min_resolution, "UVSphere")
+        nu, nv = _check_resolution(self.resolution[0] if nu is None else nu,
+                                   self.resolution[1] if nv is None else nv,
+                                   *self._min_resolution, "UVSphere")
         pole_u = (np.arange(nu) + 0.5) / nu
         ring_u, ring_v = np.meshgrid(
             np.arange(nu + 1) / nu, np.arange(1, nv) / nv, indexing="xy"
@@ -330,7 +342,6 @@ class UVSphere(ParametricSurface):
             np.stack([ring_u.ravel(), ring_v.ravel()], 1),
             np.stack([pole_u, np.ones(nu)], 1),
         ])
-        state = self.state_at_uv(uv)
         i = np.arange(nu)
         ring0 = nu                                   # first vertex of ring j = 1
         last = nu + (nv - 2) * (nu + 1)              # first vertex of ring j = nv - 1
@@ -338,8 +349,7 @@ class UVSphere(ParametricSurface):
         south_fan = np.stack([i, ring0 + i + 1, ring0 + i], 1)
         north_fan = np.stack([last + i, last + i + 1, north + i], 1)
         body = _grid_faces(nu, nv - 2) + ring0
-        faces = np.concatenate([south_fan, body, north_fan]).astype(np.int64)
-        return _texture_mesh(state.position, faces, uv, state.normal)
+        return uv, np.concatenate([south_fan, body, north_fan]).astype(np.int64)
 
 
 class Cylinder(ParametricSurface):
@@ -364,6 +374,7 @@ class Cylinder(ParametricSurface):
     periodic_u = True
     periodic_v = False
     _min_resolution = (3, 1)
+    resolution = (32, 1)
 
     def __init__(self, radius: float = 1.0, height: float = 1.0):
         self.radius = _positive(radius, "Cylinder radius")
@@ -382,9 +393,6 @@ class Cylinder(ParametricSurface):
         tangent_v = np.broadcast_to([0.0, 1.0, 0.0], (len(uv), 3)).copy()
         return ShadingState(position, normal, uv, tangent_u, tangent_v)
 
-    def base_mesh(self, nu: int = 32, nv: int = 1) -> trimesh.Trimesh:
-        """The open tube as nu x nv cells (seam column duplicated)."""
-        return super().base_mesh(nu, nv)
 
 
 class Torus(ParametricSurface):
@@ -414,6 +422,7 @@ class Torus(ParametricSurface):
     periodic_u = True
     periodic_v = True
     _min_resolution = (3, 3)
+    resolution = (48, 16)
 
     def __init__(self, major: float = 1.0, minor: float = 0.25):
         self.major = _positive(major, "Torus major radius")
@@ -436,9 +445,6 @@ class Torus(ParametricSurface):
         tangent_v = -sin_p[:, None] * radial + cos_p[:, None] * up
         return ShadingState(position, normal, uv, tangent_u, tangent_v)
 
-    def base_mesh(self, nu: int = 48, nv: int = 16) -> trimesh.Trimesh:
-        """The torus as nu x nv cells (both seams duplicated)."""
-        return super().base_mesh(nu, nv)
 
 
 class MeshSurface:

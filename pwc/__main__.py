@@ -2,6 +2,6 @@
 
 import sys
 
-from pwc.cli import main
+from pwc.cli import entry
 
-sys.exit(main())
+sys.exit(entry())

@@ -127,12 +127,9 @@ def _surface_is_closed(surface) -> bool:
 
     if is_mesh_surface(surface):
         mesh = surface.base_mesh()
-    else:
-        try:
-            mesh = surface.base_mesh(8, 6)
-        except TypeError:
-            mesh = surface.base_mesh()
-    return is_closed(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+        return is_closed(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    uv, faces = surface.base_grid(8, 6)
+    return is_closed(surface.state_at_uv(uv).position, faces)
 
 
 def _may_enclose(material) -> bool:

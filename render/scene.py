@@ -630,12 +630,10 @@ def _object_triangles(obj: SceneObject, camera: Camera, settings: RenderSettings
         pos = state.position
         new_faces = np.arange(3 * nf, dtype=np.int64).reshape(nf, 3)
     else:
-        res = obj.resolution or _BASE_RESOLUTION.get(type(surface).__name__)
-        base = surface.base_mesh(*res) if res is not None else surface.base_mesh()
-        uv = np.asarray(base.visual.uv, dtype=np.float64)
+        res = obj.resolution or _BASE_RESOLUTION.get(type(surface).__name__, (None, None))
+        uv, new_faces = surface.base_grid(*res)
         state = surface.state_at_uv(uv)
-        pos = np.asarray(base.vertices, dtype=np.float64)
-        new_faces = np.asarray(base.faces, dtype=np.int64)
+        pos = state.position
     verts = pos @ obj.linear.T + obj.translation
     n = obj.to_world_normals(state.normal)
     tu = _unit_rows(state.tangent_u @ obj.linear.T)

@@ -24,6 +24,7 @@ BENCHMARKS = {
     "light_selection.py": ["--quick"],
     "mdl_speed.py": ["--quick"],
     "hair.py": ["--quick"],
+    "start_up.py": ["--quick"],
 }
 
 

@@ -228,6 +228,22 @@ def test_base_mesh_matches_surface(surface, nu, nv):
     assert np.all(mesh.area_faces > 0)
 
 
+@pytest.mark.parametrize("surface,default", [
+    (Plane(resolution=(3, 2)), (3, 2)), (UVSphere(), (32, 16)), (Cylinder(), (32, 1)),
+    (Torus(), (48, 16)),
+])
+def test_base_grid_is_the_base_mesh_without_trimesh(surface, default):
+    """The renderer's path (``base_grid``, then ``state_at_uv``) makes the base mesh's
+    triangles, at the given resolution and at the surface's default."""
+    for res in ((6, 4), (None, None)):
+        uv, faces = surface.base_grid(*res)
+        mesh = surface.base_mesh(*res)
+        np.testing.assert_array_equal(uv, mesh.visual.uv)
+        np.testing.assert_array_equal(faces, mesh.faces)
+        assert faces.dtype == np.int64
+    assert surface.base_grid()[0].shape == surface.base_grid(*default)[0].shape
+
+
 def test_sphere_mesh_counts_poles_and_volume():
     nu, nv = 64, 32
     mesh = UVSphere(1.3).base_mesh(nu, nv)

@@ -508,6 +508,27 @@ def test_pwc_render_own_profile_outputs_checked_first_and_summary(tmp_path):
     assert r.returncode == 3 and "cannot read the scene file" in r.stderr
 
 
+def test_a_scene_of_parametric_surfaces_loads_and_builds_without_trimesh():
+    """trimesh takes 0.45 s to import, a third of a cached start (docs/render.md#speed):
+    a bundled scene of a displaced plane and a quad light is read and built for Embree
+    without it."""
+    import subprocess
+    import sys
+
+    from repo import checkout_env
+
+    code = ("import sys\n"
+            "from render.library.resources import bundled_scenes\n"
+            "from render.scene import load_scene\n"
+            "scene = load_scene(bundled_scenes() / 'fig_14_28.toml')\n"
+            "scene.build()\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'trimesh'))\n")
+    r = subprocess.run([sys.executable, "-c", code], env=checkout_env(), capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
 def test_first_compile_notice_only_on_a_cold_cache_once_per_process(tmp_path, monkeypatch,
                                                                    capsys):
     from render.jit import cache_dir
