@@ -210,6 +210,11 @@ def _stack(arrays: list) -> np.ndarray:
     return np.concatenate([np.broadcast_to(a, (n, a.shape[1])) for a in arrays], axis=1)
 
 
+def _same_rows(a: np.ndarray) -> bool:
+    """Whether every row of ``a`` equals its first (one row: trivially)."""
+    return a.shape[0] == 1 or bool(np.all(a == a[0]))
+
+
 def pack(signature: Signature, values: dict, name: str) -> tuple[np.ndarray, int]:
     """The slot columns of one node and its flags, from MDL arguments and context.
 
@@ -359,7 +364,11 @@ def combine(kind: str, op: int, columns: np.ndarray, flags: int, children: list,
                       np.array(frame_rows, dtype=np.int64).reshape(-1, 3), P,
                       np.concatenate(tabs) if tabs else np.zeros(0), lobes)
     if curve_columns is not None:
-        program = _with_chat_table(program, curve_columns)
+        # Ĉ depends on the layer child's parameters and the curve's own: checked here,
+        # on the parts, rather than on the stacked lanes
+        constant = ((children[0] is None or _same_rows(children[0].P))
+                    and _same_rows(columns[:, curve_columns]))
+        program = _with_chat_table(program, curve_columns, constant)
     return program
 
 
@@ -414,13 +423,14 @@ _TABLES_MAX = 256
 _TABLES_LOCK = threading.Lock()
 
 
-def _with_chat_table(program: Program, curve_columns: np.ndarray) -> Program:
+def _with_chat_table(program: Program, curve_columns: np.ndarray, constant: bool) -> Program:
     """``program`` (a curve layer at its root) with its Ĉ table, where one applies.
 
     Ĉ is tabulated from parameter row 0 when every parameter it depends on (the layer
-    child's subtree, its frames, the curve's own parameters) is the same on every lane;
-    otherwise (textured layers) the layer keeps libbsdf's base factor (``CHAT_NONE``).
-    A table is built once per distinct layer and curve (cached by value).
+    child's subtree, its frames, the curve's own parameters) is the same on every lane
+    (``constant``); otherwise (textured layers) the layer keeps libbsdf's base factor
+    (``CHAT_NONE``).  A table is built once per distinct layer and curve (cached by
+    value).
     """
     from render.df._signature import MODE_MASK, REFLECT
 
@@ -436,7 +446,7 @@ def _with_chat_table(program: Program, curve_columns: np.ndarray) -> Program:
     cols.append(code[root, BASE] + np.flatnonzero(curve_columns))
     cols = np.concatenate(cols)
     P = program.P
-    if P.shape[0] > 1 and not np.all(P[:, cols] == P[0, cols]):
+    if not constant:
         return program
     from render import interpreter
 
