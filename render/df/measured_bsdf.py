@@ -331,7 +331,7 @@ class MeasuredBsdf(ProgramBsdf):
         code[0, TABLE] = 0
         lobes = {MODE_FLAGS["scatter_reflect"]: Lobe.GLOSSY_REFLECTION,
                  MODE_FLAGS["scatter_transmit"]: Lobe.GLOSSY_TRANSMISSION}.get(m, Lobe.GLOSSY)
-        ProgramBsdf.__init__(self, Program("bsdf", code, prog.kids, prog.frames, prog.P,
+        ProgramBsdf.__init__(self, Program("bsdf", code, prog.kids, prog.frames, prog.blocks,
                                            table, lobes))
         self.measurement = measurement
         self.scale = scale

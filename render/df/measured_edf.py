@@ -325,7 +325,7 @@ class MeasuredEdf(ProgramEdf):
         prog = leaf_program("edf", O_MEASURED_EDF, SIGNATURE, values, Lobe.NONE, title)
         code = prog.code.copy()
         code[0, TABLE] = 0
-        ProgramEdf.__init__(self, Program("edf", code, prog.kids, prog.frames, prog.P, table,
+        ProgramEdf.__init__(self, Program("edf", code, prog.kids, prog.frames, prog.blocks, table,
                                           prog.lobes))
         self.profile = profile
 

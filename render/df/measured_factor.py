@@ -112,7 +112,7 @@ class MeasuredFactor(ProgramBsdf):
                        [None if base is None else base.program])
         code = prog.code.copy()
         code[prog.root, TABLE] = len(prog.tables)
-        ProgramBsdf.__init__(self, Program("bsdf", code, prog.kids, prog.frames, prog.P,
+        ProgramBsdf.__init__(self, Program("bsdf", code, prog.kids, prog.frames, prog.blocks,
                                            np.concatenate([prog.tables, table]), prog.lobes))
         self.base = base
 

@@ -288,8 +288,7 @@ class ThinFilm:
                                          out)
             code[k, pg.TABLE] = len(tables)
             tables = np.concatenate([tables, out.ravel()])
-        new = pg.Program(prog.kind, code, prog.kids, prog.frames, np.ascontiguousarray(P),
-                         tables, prog.lobes)
+        new = pg.Program(prog.kind, code, prog.kids, prog.frames, (P,), tables, prog.lobes)
         obj = pg.ProgramBsdf.__new__(type(base))
         pg.ProgramBsdf.__init__(obj, new)
         obj.__dict__.update({k: v for k, v in base.__dict__.items() if k != "program"})
