@@ -30,9 +30,10 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from displacement.state import ShadingState
+
 if TYPE_CHECKING:  # imported where a mesh is made: trimesh costs 0.45 s to import
     import trimesh
-from displacement.state import ShadingState
 
 __all__ = [
     "Surface",
@@ -177,11 +178,15 @@ class ParametricSurface:
         faces : (m, 3) int64
             Triangles wound counter-clockwise seen from the normal side.
         """
-        nu, nv = _check_resolution(self.resolution[0] if nu is None else nu,
-                                   self.resolution[1] if nv is None else nv,
-                                   *self._min_resolution, type(self).__name__)
+        nu, nv = self._cells(nu, nv)
         u, v = np.meshgrid(np.arange(nu + 1) / nu, np.arange(nv + 1) / nv, indexing="xy")
         return np.stack([u.ravel(), v.ravel()], axis=1), _grid_faces(nu, nv)
+
+    def _cells(self, nu, nv) -> tuple[int, int]:
+        """``(nu, nv)`` checked, ``resolution`` where not given."""
+        return _check_resolution(self.resolution[0] if nu is None else nu,
+                                 self.resolution[1] if nv is None else nv,
+                                 *self._min_resolution, type(self).__name__)
 
     def base_mesh(self, nu: int | None = None, nv: int | None = None) -> trimesh.Trimesh:
         """A triangle mesh of the surface on an nu x nv uv grid (default: ``resolution``).
@@ -330,9 +335,7 @@ class UVSphere(ParametricSurface):
         degenerate); the seam column u = 1 duplicates u = 0: ``2 nu + (nv - 1)(nu + 1)``
         vertices, ``2 nu (nv - 1)`` triangles.
         """
-        nu, nv = _check_resolution(self.resolution[0] if nu is None else nu,
-                                   self.resolution[1] if nv is None else nv,
-                                   *self._min_resolution, "UVSphere")
+        nu, nv = self._cells(nu, nv)
         pole_u = (np.arange(nu) + 0.5) / nu
         ring_u, ring_v = np.meshgrid(
             np.arange(nu + 1) / nu, np.arange(1, nv) / nv, indexing="xy"

@@ -455,7 +455,7 @@ def _with_chat_table(program: Program, curve_columns: np.ndarray, constant: bool
 
     code, root = program.code, program.root
     lay = program.kids[code[root, KID0]]
-    if lay < 0:
+    if lay < 0 or not constant:
         return program
     # a mirror layer (specular_bsdf reflecting) never exceeds libbsdf's factor
     if code[lay, OP] == O_SPECULAR and (code[lay, FLAGS] & MODE_MASK) == REFLECT:
@@ -464,8 +464,6 @@ def _with_chat_table(program: Program, curve_columns: np.ndarray, constant: bool
     cols = [np.arange(code[k, BASE], code[k, BASE] + code[k, WIDTH]) for k in range(lo, lay + 1)]
     cols.append(code[root, BASE] + np.flatnonzero(curve_columns))
     cols = np.concatenate(cols)
-    if not constant:
-        return program
     P = program.first_row()  # what Ĉ depends on is the same on every lane
     from render import interpreter
 
