@@ -222,6 +222,25 @@ def measured_curve1(P, row, at, n, c, ch):
 
 
 @njit
+def measured_curve3(P, row, at, n, c):
+    """:func:`measured_curve1` of the three channels."""
+    return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
+            measured_curve1(P, row, at, n, c, 2))
+
+
+@njit
+def measured_curve_constant(P, row, at, n):
+    """Whether the measured curve at ``P[row, at:at + 3 n]`` takes one value at every
+    cosine (every colour equal, as saturated)."""
+    for j in range(1, n):
+        for k in range(3):
+            if (min(max(P[row, at + 3 * j + k], 0.0), 1.0)
+                    != min(max(P[row, at + k], 0.0), 1.0)):
+                return False
+    return True
+
+
+@njit
 def scale_half_vector(wox, woy, woz, wix, wiy, wiz):
     """``(wo.h, n.h)`` of a directional modifier: ``h`` the reflection half vector with
     both directions mirrored to ``wo``'s side and a transmitted ``wi`` mirrored through

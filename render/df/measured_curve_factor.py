@@ -18,7 +18,7 @@ base's sampler (the interpreter's control variate), exact for a constant curve.
 
 from __future__ import annotations
 
-from render.df._layer import measured_curve1, scale_cosine
+from render.df._layer import measured_curve3, measured_curve_constant, scale_cosine
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.program import O_MEASURED_CURVE_FACTOR, df_class
@@ -41,23 +41,13 @@ def scale(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     c = scale_cosine(wox, woy, woz, wix, wiy, wiz)
     if c < 0.0:
         return 0.0, 0.0, 0.0
-    n = int(P[row, b + _N])
-    at = b + _AT
-    return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
-            measured_curve1(P, row, at, n, c, 2))
+    return measured_curve3(P, row, b + _AT, int(P[row, b + _N]), c)
 
 
 @njit
 def curve_constant(P, row, b, flags):
     """The curve takes one value at every cosine: the albedo needs no quadrature."""
-    n = int(P[row, b + _N])
-    at = b + _AT
-    for j in range(1, n):
-        for k in range(3):
-            if (min(max(P[row, at + 3 * j + k], 0.0), 1.0)
-                    != min(max(P[row, at + k], 0.0), 1.0)):
-                return False
-    return True
+    return measured_curve_constant(P, row, b + _AT, int(P[row, b + _N]))
 
 
 MeasuredCurveFactor = df_class("MeasuredCurveFactor", "measured_curve_factor",

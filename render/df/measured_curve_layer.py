@@ -28,7 +28,7 @@ The curve is uniform: one array for every lane, packed after the node's slots
 from __future__ import annotations
 
 from render.df import _curve_layer
-from render.df._layer import curve_geometry, measured_curve1
+from render.df._layer import curve_geometry, measured_curve3, measured_curve_constant
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 from render.program import O_MEASURED_CURVE_LAYER, df_class
@@ -70,10 +70,7 @@ _AT = COLOR_SIGNATURE.width  # the curve's colours follow the node's slots
 @njit
 def _curve3(P, row, b, flags, woz, c):
     """``C(c)`` per channel (the same on either side)."""
-    n = int(P[row, b + _N])
-    at = b + _AT
-    return (measured_curve1(P, row, at, n, c, 0), measured_curve1(P, row, at, n, c, 1),
-            measured_curve1(P, row, at, n, c, 2))
+    return measured_curve3(P, row, b + _AT, int(P[row, b + _N]), c)
 
 
 @njit
@@ -105,14 +102,7 @@ def layer_possible(P, row, b, flags):
 @njit
 def curve_constant(P, row, b, flags):
     """The curve takes one value at every cosine (every colour equal)."""
-    n = int(P[row, b + _N])
-    at = b + _AT
-    for j in range(1, n):
-        for k in range(3):
-            if (min(max(P[row, at + 3 * j + k], 0.0), 1.0)
-                    != min(max(P[row, at + k], 0.0), 1.0)):
-                return False
-    return True
+    return measured_curve_constant(P, row, b + _AT, int(P[row, b + _N]))
 
 
 # --- the Python classes ----------------------------------------------------------------
