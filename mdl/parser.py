@@ -742,15 +742,13 @@ class _Parser:
         return cond
 
     def binary(self, level: int):
-        """Precedence climbing over :data:`_BINARY` (left-associative)."""
+        """Precedence climbing over :data:`_BINARY` (left-associative): the operators of
+        ``level`` and above, one call per operand rather than one per level."""
         start = self.tok.start
-        if level == len(_BINARY):
-            return self.unary()
-        left = self.binary(level + 1)
-        ops = _BINARY[level]
-        while self.tok.kind in ops:
+        left = self.unary()
+        while (op_level := _PREC.get(self.tok.kind, -1)) >= level:
             op = self.advance().kind
-            right = self.binary(level + 1)
+            right = self.binary(op_level + 1)
             left = A.Binary(self.span_from(start), op, left, right)
         return left
 

@@ -524,6 +524,82 @@ def test_tokens():
     assert isinstance(parse_expression(Source("e", "f(-1)")).args[0].value, A.Unary)
 
 
+@pytest.mark.parametrize(("text", "tokens"), [
+    ("\ufeffa // end, no newline", [("ident", "a")]),
+    ("a/b/=c", [("ident", "a"), ("/", "/"), ("ident", "b"), ("/=", "/="), ("ident", "c")]),
+    ("a/*x/*y*/z*/b", [("ident", "a"), ("ident", "b")]),
+    ("a //c\n\t/ /b", [("ident", "a"), ("/", "/"), ("/", "/"), ("ident", "b")]),
+    ("v.x .5 1.", [("ident", "v"), (".", "."), ("ident", "x"), ("float", ".5"),
+                   ("float", "1.")]),
+    ("ifx if x_1", [("ident", "ifx"), ("if", "if"), ("ident", "x_1")]),
+    ('"a" "b"', [("string", '"a" "b"')]),
+    ("", []),
+])
+def test_tokens_at_the_edges(text, tokens):
+    """Comments, a byte-order mark, operators beside comments, a '.' before a digit or a
+    name, keywords inside words, adjacent strings, nothing at all."""
+    toks = tokenize(Source("t", text))
+    assert [(t.kind, t.text) for t in toks[:-1]] == tokens
+    assert toks[-1].kind == "eof" and toks[-1].start == len(text)
+    for t in toks[:-1]:
+        assert text[t.start:t.end] == t.text
+
+
+@pytest.mark.parametrize(("text", "message", "col"), [
+    ("a 'q'", "quoted identifiers", 3), ("a _b", "unexpected character '_'", 3),
+    ("a \u200b", "U+200B", 3), ("a @", "unexpected character '@'", 3),
+    ("a /* b", "unterminated block comment", 3), ('a "b', "unterminated string", 3),
+])
+def test_a_bad_character_is_located(text, message, col):
+    with pytest.raises(MdlError) as e:
+        tokenize(Source("t", text))
+    assert message in e.value.first.message and e.value.first.loc.col == col
+
+
+def _grouping(e) -> str:
+    """A binary tree's grouping, fully parenthesised."""
+    if isinstance(e, A.Binary):
+        return f"({_grouping(e.left)} {e.op} {_grouping(e.right)})"
+    if isinstance(e, A.Unary):
+        return f"{e.op}{_grouping(e.operand)}"
+    return e.name.text
+
+
+@pytest.mark.parametrize(("text", "grouped"), [
+    ("a || b && c", "(a || (b && c))"), ("a && b | c", "(a && (b | c))"),
+    ("a | b ^ c & d", "(a | (b ^ (c & d)))"), ("a & b == c", "(a & (b == c))"),
+    ("a != b <= c", "(a != (b <= c))"), ("a > b >> c", "(a > (b >> c))"),
+    ("a << b - c", "(a << (b - c))"), ("a + b % c", "(a + (b % c))"),
+    ("a * b + c", "((a * b) + c)"), ("a - b - c", "((a - b) - c)"),
+    ("a / b % c * d", "(((a / b) % c) * d)"), ("a || b || c", "((a || b) || c)"),
+    ("a < b == c < d", "((a < b) == (c < d))"), ("-a * b", "(-a * b)"),
+    ("a * b + c * d << e & f", "((((a * b) + (c * d)) << e) & f)"),
+])
+def test_binary_operators_group_by_cs_precedence(text, grouped):
+    assert _grouping(parse_expression(Source("e", text))) == grouped
+
+
+@given(st.lists(st.sampled_from(["|", "^", "&", "<<", ">>", "+", "-", "*", "/", "%"]),
+                min_size=1, max_size=10))
+def test_binary_operators_group_as_python_does(ops):
+    """For the operators whose order Python shares with C (not comparisons, which chain
+    in Python, nor its words ``and``/``or``), random chains group as Python's own parser
+    groups them."""
+    import ast as py
+
+    def python_grouping(e) -> str:
+        if isinstance(e, py.BinOp):
+            op = {py.BitOr: "|", py.BitXor: "^", py.BitAnd: "&", py.LShift: "<<",
+                  py.RShift: ">>", py.Add: "+", py.Sub: "-", py.Mult: "*", py.Div: "/",
+                  py.Mod: "%"}[type(e.op)]
+            return f"({python_grouping(e.left)} {op} {python_grouping(e.right)})"
+        return e.id
+
+    text = "a0" + "".join(f" {op} a{i + 1}" for i, op in enumerate(ops))
+    assert _grouping(parse_expression(Source("e", text))) == python_grouping(
+        py.parse(text, mode="eval").body)
+
+
 def test_entities_of_a_module():
     m = load("mdl 1.6;\nexport const float k = 2.0;\nexport float f(float x) = k * x;\n")
     assert isinstance(m.scope["k"][0], ConstEntity) and isinstance(m.functions("f")[0], Overload)

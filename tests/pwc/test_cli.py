@@ -255,15 +255,18 @@ def test_catalogue_keeps_a_readme_it_did_not_write(tmp_path):
 def _entry(tmp_path, argv: list, before: str = "pass") -> list:
     """``pwc.cli.entry`` run with ``argv`` in a fresh process (after the Python ``before``):
     its status, whether numba and render.df were loaded, whether its objects are frozen
-    for the exit, and whether anything reported a leak."""
+    for the exit, whether anything reported a leak, and the collector's third threshold."""
     code = (f"import gc, sys; {before}; from pwc.cli import entry; sys.argv = {argv!r}; "
             "rc = entry(); "
             "print(rc, 'numba' in sys.modules, 'render.df' in sys.modules, "
-            "gc.get_freeze_count() > 0)")
+            "gc.get_freeze_count() > 0, gc.get_threshold()[2])")
     r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=checkout_env(),
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
-    return [*r.stdout.split()[-4:], "leaked" in r.stderr]
+    *out, threshold = r.stdout.split()[-5:]
+    # full passes spaced out for every command (pwc.cli.space_out_full_collections)
+    assert threshold == "1000"
+    return [*out, "leaked" in r.stderr]
 
 
 def test_commands_that_do_not_render_do_not_import_the_render_kernels(tmp_path):
