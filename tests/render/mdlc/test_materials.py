@@ -240,6 +240,25 @@ def test_a_session_reuses_its_modules(module_dir):
     assert len([q for q in session.loader.modules if q == "::looks"]) == 1
 
 
+def test_a_call_imports_the_modules_it_names_and_no_more(module_dir):
+    """The string form's scope imports a module beyond the standard ones and the
+    workbench's only when the call names it (``perlin_noise::``, ``base::``), in a
+    string-form call or in a call into a module: importing them all was half of a scene
+    file's check."""
+    plain = Session()
+    plain.material("diffuse(tint: color(0.5))")
+    loaded = set(plain.loader.modules)
+    assert {"::materials", "::df"} <= loaded
+    assert not loaded & {"::base", "::perlin_noise", "::pwc_examples", "::geometry"}
+    noise = "perlin_noise::perlin_noise(float3(0.1, 0.2, 0.3))"
+    for session, call, module in [(Session(), f"diffuse(tint: color({noise}))", None),
+                                  (Session(module_dir), f"diffuse_twin(tint: color({noise}))",
+                                   "looks.mdl")]:
+        m, _ = session.material(call, module=module)
+        assert isinstance(m, M.material) and "::perlin_noise" in session.loader.modules
+        assert "::base" not in session.loader.modules
+
+
 MDL_1_10 = """\
 mdl 1.10;
 import ::df::*;
