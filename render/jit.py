@@ -27,6 +27,7 @@ import functools
 import hashlib
 import os
 import tempfile
+from collections import Counter
 from pathlib import Path
 from types import FunctionType
 
@@ -72,6 +73,7 @@ class _RenderCacheLocator(_CacheLocator):
     def __init__(self, py_func, py_file):
         self._lineno = py_func.__code__.co_firstlineno
         self._module = py_func.__module__
+        self._instance = getattr(py_func, "_instance", 0)
         self._cache_path = str(cache_dir() / _package_path(py_file).with_suffix(""))
 
     def get_cache_path(self):
@@ -81,9 +83,9 @@ class _RenderCacheLocator(_CacheLocator):
         return SOURCE_KEY
 
     def get_disambiguator(self):
-        # the module tells apart the instances of one template (:func:`instantiate`),
-        # which share its file and line
-        return f"{self._lineno}-{self._module}"
+        # the module and the instance's number in it tell apart the instances of one
+        # template (:func:`instantiate`), which share its file and line
+        return f"{self._lineno}-{self._module}-{self._instance}"
 
     @classmethod
     def from_function(cls, py_func, py_file):
@@ -140,11 +142,18 @@ def instantiate(template, module: str, allocates: bool = False, **names):
     numba caches neither a closure nor a kernel that takes another as an argument (both
     keys hold an object's per-process id, so every run compiles them again); an instance
     is a copy of the template's code over its globals and ``names``, keyed in the cache
-    by ``module`` (:class:`_RenderCacheLocator`)."""
+    by ``module`` and by its number among the template's instances in that module
+    (:class:`_RenderCacheLocator`), which the module's code fixes."""
     scope = {**template.__globals__, **names, "__name__": module}
     f = FunctionType(template.__code__, scope, template.__name__, template.__defaults__)
     f.__doc__, f.__qualname__ = template.__doc__, template.__qualname__
+    f._instance = _INSTANCES[template.__code__, module]
+    _INSTANCES[template.__code__, module] += 1
     return njit(f, allocates=allocates)
+
+
+#: instances made so far of each (template code, module)
+_INSTANCES: Counter = Counter()
 
 
 def _in_package(function) -> bool:

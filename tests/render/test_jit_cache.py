@@ -119,10 +119,29 @@ def part(x):
 kernel = instantiate(_probe_template.kernel, __name__, part=part)
 """
 
+BOTH = """\
+from render import _probe_template
+from render.jit import instantiate, njit
+
+
+@njit
+def one(x):
+    return x + 1.0
+
+
+@njit
+def two(x):
+    return x + 2.0
+
+
+kernel_one = instantiate(_probe_template.kernel, __name__, part=one)
+kernel_two = instantiate(_probe_template.kernel, __name__, part=two)
+"""
+
 RUN_INSTANCES = textwrap.dedent("""\
     import json
-    from render import _probe_one, _probe_two
-    ks = (_probe_one.kernel, _probe_two.kernel)
+    from render import _probe_both, _probe_one, _probe_two
+    ks = (_probe_one.kernel, _probe_two.kernel, _probe_both.kernel_one, _probe_both.kernel_two)
     print(json.dumps({"values": [k(1.0) for k in ks],
                       "hits": [sum(k.stats.cache_hits.values()) for k in ks],
                       "misses": [sum(k.stats.cache_misses.values()) for k in ks]}))
@@ -130,10 +149,12 @@ RUN_INSTANCES = textwrap.dedent("""\
 
 
 def test_instances_of_one_template_are_cached_apart(tmp_path, render_copy):
-    """:func:`render.jit.instantiate`: two instances share the template's file and line,
-    yet a warm cache gives each its own machine code (keyed by module), and is used."""
+    """:func:`render.jit.instantiate`: instances share the template's file and line, yet
+    the cache gives each its own machine code (keyed by module, and by the instance's
+    number within one module), cold and warm, and is used."""
     for name, offset in (("one", "1.0"), ("two", "2.0")):
         (render_copy / "render" / f"_probe_{name}.py").write_text(INSTANCE.format(offset=offset))
+    (render_copy / "render" / "_probe_both.py").write_text(BOTH)
     (render_copy / "render" / "_probe_template.py").write_text(TEMPLATE)
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHONPATH": str(render_copy),
            "PWC_CACHE_DIR": str(tmp_path / "cache")}
@@ -145,8 +166,8 @@ def test_instances_of_one_template_are_cached_apart(tmp_path, render_copy):
         return json.loads(r.stdout.strip().splitlines()[-1])
 
     cold, warm = run(), run()
-    assert cold["values"] == [4.0, 6.0] and cold["misses"] == [1, 1]
-    assert warm["values"] == [4.0, 6.0] and warm["hits"] == [1, 1]
+    assert cold["values"] == [4.0, 6.0] * 2 and cold["misses"] == [1] * 4
+    assert warm["values"] == [4.0, 6.0] * 2 and warm["hits"] == [1] * 4
 
 
 def test_a_kernel_compiles_once_whatever_literal_values_it_is_called_with():
