@@ -37,7 +37,9 @@ needs at most four columns (``benchmarks/glossy_kernels.py``).
 from __future__ import annotations
 
 import math
+import os
 import sys
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -87,17 +89,19 @@ def _mu_nodes(m: int) -> Arr:
     return np.maximum(np.linspace(0.0, 1.0, m) ** 2, MU_MIN)
 
 
+def _kernels(cls):
+    """The df's kernels: the module of the first class in the MRO that has them (a
+    subclass of a df class defined elsewhere samples through its parent's kernels)."""
+    return next(m for m in (sys.modules.get(c.__module__) for c in cls.__mro__)
+                if hasattr(m, "sample_weights"))
+
+
 def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     """Mean white sample weight for each row of ``wo`` (m, 3), through the df's kernels."""
     from render.df._common import ScatterMode
     from render.df._signature import MODE_FLAGS
 
-    # the df's kernels: the module of the first class in the MRO that has them (a
-    # subclass of a df class defined elsewhere samples through its parent's kernels)
-    module = next(
-        m for m in (sys.modules.get(c.__module__) for c in cls.__mro__)
-        if hasattr(m, "sample_weights")
-    )
+    module = _kernels(cls)
     sig = module.SIGNATURE
     P = np.zeros((1, sig.width))
     names = [p.name for p in sig.params]
@@ -118,13 +122,48 @@ def _mean_weight(cls, mode, eta, ru, rv, wo: np.ndarray, points: int) -> Arr:
     return w.mean(axis=1)
 
 
+def _stored(name: str, compute) -> Arr:
+    """``compute()``, kept on disk as ``albedo/<name>.npy`` in the kernels' cache folder
+    (:func:`render.jit.cache_dir`: per user, per source tree).  A column is a mean over
+    4096 samples through the df's kernels, 50-80 ms, and the same in every process of one
+    tree; a glossy scene's start computed two to six of them (0.1-0.3 s, 32 of the 83
+    gallery scenes).  A file that cannot be read is computed again; one that cannot be
+    written is not kept."""
+    from render.jit import cache_dir
+
+    path = cache_dir() / "albedo" / f"{name}.npy"
+    try:
+        return np.load(path)
+    except (OSError, ValueError, EOFError):
+        pass
+    value = compute()
+    try:  # written whole, then renamed: a reader never sees half a file
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part = path.with_name(f"{path.name}.{os.getpid()}-{threading.get_ident()}")
+        with open(part, "wb") as f:
+            np.save(f, value)
+        os.replace(part, path)
+    except OSError:
+        pass
+    return value
+
+
+def _column_name(cls: type, mode, eta: float, *nodes: int) -> str:
+    """What a column depends on: the kernels' module, the mode, eta, the roughness nodes."""
+    return "-".join([_kernels(cls).__name__, str(getattr(mode, "name", mode)),
+                     repr(float(eta)), *map(str, nodes)])
+
+
 @lru_cache(maxsize=None)
 def iso_column(cls: type, mode, eta: float, ir: int) -> Arr:
     """``E`` at the ``N_MU`` cosine nodes for roughness node ``ir`` (isotropic)."""
-    mu = _mu_nodes(N_MU)
-    wo = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=1)
-    r = float(ROUGHNESS_NODES[ir])
-    return _mean_weight(cls, mode, eta, r, r, wo, N_POINTS)
+    def compute():
+        mu = _mu_nodes(N_MU)
+        wo = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], axis=1)
+        r = float(ROUGHNESS_NODES[ir])
+        return _mean_weight(cls, mode, eta, r, r, wo, N_POINTS)
+
+    return _stored(_column_name(cls, mode, eta, ir), compute)
 
 
 def _average_iso(col: Arr) -> float:
@@ -161,14 +200,16 @@ def aniso_average(cls: type, mode, eta: float, iu: int, iv: int) -> float:
 @lru_cache(maxsize=None)
 def aniso_column(cls: type, mode, eta: float, iu: int, iv: int) -> Arr:
     """``E`` at ``N_PHI x N_MU_A`` (azimuth, cosine) nodes for roughness nodes ``(iu, iv)``."""
-    mu = _mu_nodes(N_MU_A)
-    P, M = np.meshgrid(_PHI, mu, indexing="ij")
-    s = np.sqrt(1.0 - M * M)
-    wo = np.stack([s * np.cos(P), s * np.sin(P), M], axis=-1).reshape(-1, 3)
-    E = _mean_weight(
-        cls, mode, eta, float(ROUGHNESS_NODES[iu]), float(ROUGHNESS_NODES[iv]), wo, N_POINTS_A
-    )
-    return E.reshape(N_PHI, N_MU_A)
+    def compute():
+        mu = _mu_nodes(N_MU_A)
+        P, M = np.meshgrid(_PHI, mu, indexing="ij")
+        s = np.sqrt(1.0 - M * M)
+        wo = np.stack([s * np.cos(P), s * np.sin(P), M], axis=-1).reshape(-1, 3)
+        E = _mean_weight(cls, mode, eta, float(ROUGHNESS_NODES[iu]),
+                         float(ROUGHNESS_NODES[iv]), wo, N_POINTS_A)
+        return E.reshape(N_PHI, N_MU_A)
+
+    return _stored(_column_name(cls, mode, eta, iu, iv), compute)
 
 
 def _locate(y: Arr, nodes: Arr) -> tuple[np.ndarray, Arr]:
