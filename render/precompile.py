@@ -28,8 +28,10 @@ import inspect
 import os
 import subprocess
 import sys
+import threading
 
 from numba import types
+from numba.core import event
 
 __all__ = ["KERNEL_ARGS", "df_kernels", "kernel_signature", "compile_df_kernels",
            "compile_df_kernels_aside", "cores", "kernels_ready", "notice_first_compile",
@@ -103,22 +105,59 @@ def kernels_ready() -> bool:
 
 
 _said: set = set()  # the cache folders this process has said it compiles into
+_said_lock = threading.Lock()
 
 
 def notice_first_compile(prog: str, quiet: bool = False) -> bool:
     """Before a render on a cold cache (not :func:`kernels_ready`), say on stderr, once
-    per process and unless ``quiet``, that the kernels compile now.  Returns whether the
-    cache is cold."""
+    per process and unless ``quiet``, that the kernels compile now.  On a ready cache,
+    say so only if the render compiles a kernel after all: one that only some scenes
+    call (a varying emission's, a curve layer's Ĉ table's: 0.4-7 s each, once per
+    machine; docs/render.md, "Start-up").  Returns whether the cache is cold."""
     from render.jit import cache_dir
 
+    if quiet:
+        return not kernels_ready()
     if kernels_ready():
+        _compile_notice.prog = prog
+        with _said_lock:
+            if not _compile_notice.registered:
+                event.register("numba:compile", _compile_notice)
+                _compile_notice.registered = True
         return False
-    folder = cache_dir()
-    if not quiet and folder not in _said:
-        _said.add(folder)
-        print(f"{prog}: compiling render kernels, once per machine (about a minute; "
-              f"cached in {folder})", file=sys.stderr)
+    _say(f"{prog}: compiling render kernels, once per machine (about a minute; cached in "
+         f"{cache_dir()})")
     return True
+
+
+def _say(message: str) -> None:
+    """``message`` on stderr, unless this process has said it compiles into this cache."""
+    from render.jit import cache_dir
+
+    with _said_lock:
+        if cache_dir() in _said:
+            return
+        _said.add(cache_dir())
+    print(message, file=sys.stderr)
+
+
+class _CompileNotice(event.Listener):
+    """Says, at the first kernel of the workbench's that a render compiles on a ready
+    cache, that it does (numba's ``numba:compile`` event: a compile, not a cache load)."""
+
+    prog, registered = "pwc", False
+
+    def on_start(self, ev):
+        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
+        if module.split(".")[0] in ("render", "displacement", "pwc", "mdl"):
+            _say(f"{self.prog}: compiling the render kernels this scene needs, once per "
+                 f"machine (seconds)")
+
+    def on_end(self, ev):
+        pass
+
+
+_compile_notice = _CompileNotice()
 
 
 @contextlib.contextmanager

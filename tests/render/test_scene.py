@@ -553,6 +553,40 @@ def test_first_compile_notice_only_on_a_cold_cache_once_per_process(tmp_path, mo
     assert not (cache_dir() / "compile.lock").exists()
 
 
+def _twice(x):
+    return 2.0 * x
+
+
+def test_on_a_ready_cache_a_render_that_compiles_says_so_once(tmp_path, monkeypatch, capsys):
+    """A kernel only some scenes call compiles on its first use (docs/render.md,
+    "Start-up"): on a ready cache the notice waits for numba's compile event, from a
+    kernel of the workbench's, and is said once per process; loading says nothing."""
+    import numba
+    from numba.core import event
+
+    from render import precompile
+    from render.jit import cache_dir, instantiate
+
+    monkeypatch.setenv("PWC_CACHE_DIR", str(tmp_path))
+    cache_dir().mkdir(parents=True)
+    (cache_dir() / precompile.READY).write_bytes(b"")
+    monkeypatch.setattr(precompile, "_said", set())
+    try:
+        assert precompile.notice_first_compile("pwc render") is False
+        assert capsys.readouterr().err == ""
+        numba.njit(_twice)(1.0)  # not the workbench's: compiled, not said
+        assert capsys.readouterr().err == ""
+        assert instantiate(_twice, "render._probe_notice")(2.0) == 4.0  # compiles: said
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "compiling the render kernels this scene needs" in err
+        assert instantiate(_twice, "render._probe_notice")(3.0) == 6.0  # said once
+        assert capsys.readouterr().err == ""
+    finally:  # the rest of the test process compiles unannounced, as before
+        if precompile._compile_notice.registered:
+            event.unregister("numba:compile", precompile._compile_notice)
+            precompile._compile_notice.registered = False
+
+
 def test_a_cache_folder_that_cannot_be_made_takes_no_turn(tmp_path, monkeypatch):
     from render.precompile import first_compile, kernels_ready, notice_first_compile
 
