@@ -615,16 +615,13 @@ class Integrator:
                 bslot[v] = len(programs)
                 programs.append(None if bsdf is None else bsdf.program)
                 if bsdf is not None:
-                    rows.append((v, bsdf.program.blocks))
+                    rows.append((v, bsdf.program))
         table = ProgramTable(programs)
         n_const = len(self.programs)
         params = np.zeros((n_const + q, table.width))
         params[:n_const, : self.params.shape[1]] = self.params
-        for v, blocks in rows:  # each block straight into the lanes' rows
-            at = 0
-            for b in blocks:
-                params[n_const + v, at:at + b.shape[1]] = b
-                at += b.shape[1]
+        for v, program in rows:
+            program.write_params(params, n_const + v)
         tables = self.tables._replace(code=table.code, kids=table.kids, frames=table.frames,
                                       chat=table.tables, roots=table.roots,
                                       frame_lo=table.frame_lo, frame_hi=table.frame_hi)

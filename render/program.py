@@ -164,7 +164,17 @@ class Program:
     @cached_property
     def P(self) -> np.ndarray:
         """(rows, S) float64: the parameters, one row per lane or one for all."""
-        return np.ascontiguousarray(_stack(list(self.blocks)))
+        out = np.empty((self.rows, self.width))
+        self.write_params(out)
+        return out
+
+    def write_params(self, out: np.ndarray, rows=slice(None)) -> None:
+        """The blocks side by side into ``out[rows]`` from column 0, each broadcast over
+        the rows (a bind writes a lane's program straight into the scene's table)."""
+        at = 0
+        for b in self.blocks:
+            out[rows, at:at + b.shape[1]] = b
+            at += b.shape[1]
 
     @property
     def rows(self) -> int:
