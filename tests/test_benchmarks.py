@@ -25,6 +25,7 @@ BENCHMARKS = {
     "mdl_speed.py": ["--quick"],
     "hair.py": ["--quick"],
     "start_up.py": ["--quick"],
+    "kernel_profile.py": ["--quick"],
 }
 
 
