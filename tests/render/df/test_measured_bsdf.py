@@ -13,7 +13,6 @@ from render_df_cases import (
     check_consistency,
     check_no_nan,
     check_reciprocity,
-    per_wo,
     random_dirs,
 )
 
@@ -72,23 +71,39 @@ def _cases(files):
     ]
 
 
-def test_checklist(files, rng):
-    cases = _cases(files)
-    for case in cases:
-        check_consistency(case, rng)
-        check_no_nan(case, rng)
-        if case.reciprocal:
-            check_reciprocity(case, rng)
-    chi2 = [(c, w) for c in cases if c.chi2 for w in ((0.0, 0.0), (60.0, 200.0))]
-    for c, w in chi2:
-        # the sampling density is piecewise constant over the measurement's cells: its
-        # jumps cut the test's cells, so each cell is integrated with 16 x 16 points
-        # (the default 4 x 4 misjudges the jumps)
-        res = chi2_test(c.make(), direction(*w), sample_count=200_000, ires=16,
-                        test_count=len(chi2))
-        assert res.passed, f"{c.id} wo={w}: {res}"
-    for c, w in per_wo(cases, WOS):
-        _integrals(c, w)
+#: the cases' ids and chi-square pairs, known before the files exist (``make`` reads
+#: ``files`` only when called)
+CASE_IDS = [c.id for c in _cases({})]
+CHI2 = [(c.id, w) for c in _cases({}) if c.chi2 for w in ((0.0, 0.0), (60.0, 200.0))]
+
+
+def _case(files, case_id):
+    return next(c for c in _cases(files) if c.id == case_id)
+
+
+@pytest.mark.parametrize("case_id", CASE_IDS)
+def test_checklist(files, rng, case_id):
+    case = _case(files, case_id)
+    check_consistency(case, rng)
+    check_no_nan(case, rng)
+    if case.reciprocal:
+        check_reciprocity(case, rng)
+
+
+@pytest.mark.parametrize("case_id, w", CHI2, ids=[f"{c}-wo{w[0]:g}" for c, w in CHI2])
+def test_chi2(files, case_id, w):
+    # the sampling density is piecewise constant over the measurement's cells: its jumps
+    # cut the test's cells, so each cell is integrated with 16 x 16 points (the default
+    # 4 x 4 misjudges the jumps); the significance is shared by all len(CHI2) tests
+    res = chi2_test(_case(files, case_id).make(), direction(*w), sample_count=200_000,
+                    ires=16, test_count=len(CHI2))
+    assert res.passed, f"{case_id} wo={w}: {res}"
+
+
+@pytest.mark.parametrize("case_id, w", [(c, w) for c in CASE_IDS for w in WOS],
+                         ids=[f"{c}-wo{w[0]:g}" for c in CASE_IDS for w in WOS])
+def test_integrals(files, case_id, w):
+    _integrals(_case(files, case_id), w)
 
 
 def _aligned_integral(bsdf, wo, nt, nphi, side, order=8):
