@@ -53,18 +53,21 @@ def _elf_objects(obj):
             yield from _elf_objects(x)
 
 
-def _symbols(elf: bytes) -> dict:
-    """{symbol: (offset, size)} of an object file's functions (``nm -S``)."""
+def _symbols(elf: bytes) -> tuple[dict, set]:
+    """({symbol: (offset, size)} of an object file's functions (``nm -S``), the symbols
+    it defines as its own: global, where the callees linked into it are weak)."""
     with tempfile.NamedTemporaryFile(suffix=".o") as f:
         f.write(elf)
         f.flush()
         out = subprocess.run(["nm", "-S", f.name], capture_output=True, text=True).stdout
-    syms = {}
+    syms, own = {}, set()
     for line in out.splitlines():
         p = line.split()
         if len(p) == 4 and p[2] in "TtWw" and int(p[1], 16):
             syms[p[3]] = (int(p[0], 16), int(p[1], 16))
-    return syms
+            if p[2] == "T":
+                own.add(p[3])
+    return syms, own
 
 
 def _python_name(symbol: str) -> str:
@@ -87,16 +90,16 @@ def write_perf_map() -> int:
 
     from render.jit import cache_dir
 
-    tables = {}  # entry symbol -> its object file's symbols
+    tables = {}  # a kernel's entry symbol -> the symbols of the object file it is from
     for f in glob.glob(str(cache_dir() / "**" / "*.nbc"), recursive=True):
         try:
             entry = pickle.loads(Path(f).read_bytes())
         except Exception:  # noqa: BLE001 - a stale or foreign file: not ours to name
             continue
         for elf in _elf_objects(entry):
-            syms = _symbols(elf)
-            for name in syms:
-                tables.setdefault(name, syms)
+            syms, own = _symbols(elf)
+            for name in own:
+                tables[name] = syms
     rows = {}
     for d in [o for o in gc.get_objects() if isinstance(o, Dispatcher)]:
         for cres in d.overloads.values():
