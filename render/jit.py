@@ -36,7 +36,7 @@ from numba.core import types
 from numba.core.caching import CacheImpl, _CacheLocator
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["njit", "instantiate", "cache_dir", "SOURCE_KEY"]
+__all__ = ["njit", "is_kernel", "instantiate", "cache_dir", "SOURCE_KEY"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -109,6 +109,11 @@ class _Dispatcher(CPUDispatcher):
     def get_call_template(self, args, kws):
         return super().get_call_template([types.unliteral(a) for a in args],
                                          {k: types.unliteral(v) for k, v in kws.items()})
+
+
+def is_kernel(obj) -> bool:
+    """Whether ``obj`` is a kernel of the workbench's (made by :func:`njit`)."""
+    return isinstance(obj, _Dispatcher)
 
 
 def njit(function=None, allocates: bool = False, **options):

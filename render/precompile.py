@@ -134,10 +134,11 @@ def _say(message: str) -> None:
     """``message`` on stderr, unless this process has said it compiles into this cache."""
     from render.jit import cache_dir
 
+    folder = cache_dir()
     with _said_lock:
-        if cache_dir() in _said:
+        if folder in _said:
             return
-        _said.add(cache_dir())
+        _said.add(folder)
     print(message, file=sys.stderr)
 
 
@@ -145,11 +146,13 @@ class _CompileNotice(event.Listener):
     """Says, at the first kernel of the workbench's that a render compiles on a ready
     cache, that it does (numba's ``numba:compile`` event: a compile, not a cache load)."""
 
-    prog, registered = "pwc", False
+    def __init__(self):
+        self.prog, self.registered = "pwc", False
 
     def on_start(self, ev):
-        module = getattr(ev.data["dispatcher"].py_func, "__module__", "") or ""
-        if module.split(".")[0] in ("render", "displacement", "pwc", "mdl"):
+        from render.jit import is_kernel
+
+        if is_kernel(ev.data["dispatcher"]):
             _say(f"{self.prog}: compiling the render kernels this scene needs, once per "
                  f"machine (seconds)")
 
