@@ -17,6 +17,11 @@ clock, which ``perf record -k CLOCK_MONOTONIC`` stamps samples with.
 
 Printed: samples per CPU second of the render, and each function's share of the samples,
 Embree's functions summed as one.
+
+``--peer`` profiles Mitsuba 3's ``scalar_rgb`` variant instead, on the same triangles
+and one thread: C++ that, as our kernels, traces one ray and shades one lane at a time
+(Embree 3 underneath), where its ``llvm_ad_rgb`` variant shades 16 lanes at once.  Its
+functions are named by its own symbols, their template arguments left out.
 """
 
 from __future__ import annotations
@@ -120,14 +125,33 @@ def child(args) -> None:
     """The profiled process: warm up, write the map, render between two clock marks."""
     from render_vs_mitsuba import stage
 
-    from render.integrator import Integrator
+    if args.peer:
+        import drjit as dr
+        import mitsuba as mi
+        from render_vs_mitsuba import mitsuba_render, mitsuba_scene, same_triangles
 
-    scene = stage(args.kind, args.size[0], args.size[1])[0]
-    integ = Integrator(scene, scene.build())
-    integ.render(spp=1, progress=False, threads=1)  # compiles or loads every kernel
-    n = write_perf_map()
+        mi.set_variant("scalar_rgb")
+        dr.set_thread_count(1)
+        scene, md, cam = stage(args.kind, args.size[0], args.size[1])
+        tri = same_triangles(mi, md, scene.build(), [o.name for o in scene.objects])
+        peer = mitsuba_scene(mi, tri, cam)
+        mitsuba_render(mi, peer, 1, 0)  # warm-up
+        n = 0
+
+        def render():
+            mitsuba_render(mi, peer, args.spp, 1)
+    else:
+        from render.integrator import Integrator
+
+        scene = stage(args.kind, args.size[0], args.size[1])[0]
+        integ = Integrator(scene, scene.build())
+        integ.render(spp=1, progress=False, threads=1)  # compiles or loads every kernel
+        n = write_perf_map()
+
+        def render():
+            integ.render(spp=args.spp, progress=False, threads=1)
     t0, c0 = time.clock_gettime(time.CLOCK_MONOTONIC), time.process_time()
-    integ.render(spp=args.spp, progress=False, threads=1)
+    render()
     t1, c1 = time.clock_gettime(time.CLOCK_MONOTONIC), time.process_time()
     rate = args.size[0] * args.size[1] * args.spp / (c1 - c0) / 1e6
     Path(args.marks).write_text(f"{t0} {t1} {rate} {n} {os.getpid()}\n")
@@ -148,10 +172,22 @@ def shares(script: str, t0: float, t1: float) -> tuple[int, list]:
         elif re.fullmatch(r"[0-9a-fx]+|\[unknown\]", sym):
             key = f"(unnamed, {Path(dso).name})"
         else:
-            key = sym
+            key = _without_templates(sym)
         count[key] += 1
     total = sum(count.values())
     return total, [(n / total, k) for k, n in count.most_common()] if total else []
+
+
+def _without_templates(symbol: str) -> str:
+    """A C++ name without its template and call arguments
+    (``mitsuba::Mesh<float, ...>::sample_position`` -> ``mitsuba::Mesh::sample_position``)."""
+    out, depth = [], 0
+    for ch in symbol:
+        depth += ch in "<("
+        if depth == 0:
+            out.append(ch)
+        depth -= ch in ">)" and depth > 0
+    return "".join(out)
 
 
 def main(argv=None) -> int:
@@ -162,6 +198,8 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, nargs=2, default=(256, 192), metavar=("W", "H"))
     ap.add_argument("--top", type=int, default=20, help="functions to list")
     ap.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
+    ap.add_argument("--peer", action="store_true",
+                    help="profile Mitsuba 3's scalar_rgb variant on the same triangles instead")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--marks", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -180,7 +218,8 @@ def main(argv=None) -> int:
         data, marks = Path(tmp) / "perf.data", Path(tmp) / "marks"
         cmd = [perf, "record", "-q", "-F", "4000", "-k", "CLOCK_MONOTONIC", "-o", str(data),
                sys.executable, __file__, "--child", "--marks", str(marks), "--kind",
-               args.kind, "--spp", str(args.spp), "--size", *map(str, args.size)]
+               args.kind, "--spp", str(args.spp), "--size", *map(str, args.size),
+               *(["--peer"] if args.peer else [])]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0 or not marks.is_file():
             print(r.stderr, file=sys.stderr)
@@ -190,9 +229,9 @@ def main(argv=None) -> int:
                                 capture_output=True, text=True).stdout
         Path(f"/tmp/perf-{pid}.map").unlink(missing_ok=True)
     total, rows = shares(script, float(t0), float(t1))
-    print(f"stage {args.kind}, {args.size[0]} x {args.size[1]}, {args.spp} spp, one thread: "
-          f"{float(rate):.3f} M samples per CPU second; {total} samples of the render "
-          f"({int(mapped)} kernel functions named)")
+    who = "Mitsuba 3 scalar_rgb" if args.peer else f"ours ({int(mapped)} kernel functions named)"
+    print(f"stage {args.kind}, {args.size[0]} x {args.size[1]}, {args.spp} spp, one thread, "
+          f"{who}: {float(rate):.3f} M samples per CPU second; {total} samples of the render")
     for share, name in rows[:args.top]:
         print(f"{100 * share:6.1f} %  {name}")
     return 0

@@ -12,7 +12,9 @@ For each it measures
   uses both cores too), from a timed render after a warm-up (Mitsuba's JIT compile and
   our BVH build are excluded).  Mitsuba renders the very triangles we trace (our
   tessellation, vertex normals included), and, for scale, its analytic sphere and
-  rectangles;
+  rectangles.  Mitsuba's ``scalar_rgb`` variant (C++, one lane and one ray at a time,
+  as our kernels) renders the same triangles too: the peer of our scalar design,
+  where ``llvm_ad_rgb`` traces and shades 16 lanes per instruction with AVX-512;
 * the share of our threads' time spent inside Embree (``rtcIntersect1``/``rtcOccluded1``
   called from the path kernel; every 16th call timed by the CPU's time-stamp counter,
   :data:`render.path.TIMED_EVERY`), and rays per sample;
@@ -232,9 +234,12 @@ def mitsuba_mesh(mi, name, vertices, normals, faces, shape: dict):
             props[key] = mi.load_dict(shape[key])
     mesh = mi.Mesh(name, len(used), len(faces), props, has_vertex_normals=True)
     params = mi.traverse(mesh)
-    params["vertex_positions"] = mi.Float(vertices[used].astype(np.float32).ravel())
-    params["vertex_normals"] = mi.Float(normals[used].astype(np.float32).ravel())
-    params["faces"] = mi.UInt32(local.astype(np.uint32).ravel())
+    # each buffer in its own type: a Dr.Jit array in the LLVM variant, a dynamic array
+    # in the scalar one
+    for key, data in (("vertex_positions", vertices[used].astype(np.float32)),
+                      ("vertex_normals", normals[used].astype(np.float32)),
+                      ("faces", local.astype(np.uint32))):
+        params[key] = type(params[key])(data.ravel())
     params.update()
     return mesh
 
@@ -251,6 +256,18 @@ def same_triangles(mi, md, geometry, names):
 
 
 THREADS = 2
+
+
+def scalar_rate(mi, md, cam, geometry, names, spp: int) -> float:
+    """Samples per second of Mitsuba's ``scalar_rgb`` variant (C++, one ray and one
+    lane at a time, Embree 3 underneath, a thread per core) on our triangles: the peer
+    of our scalar kernels, where ``llvm_ad_rgb`` traces and shades 16 lanes at once.
+    Leaves the variant set to ``scalar_rgb``."""
+    mi.set_variant("scalar_rgb")
+    scene = mitsuba_scene(mi, same_triangles(mi, md, geometry, names), cam)
+    mitsuba_render(mi, scene, 1, 0)  # warm-up
+    image, seconds = mitsuba_render(mi, scene, spp, 1)
+    return image.shape[0] * image.shape[1] * spp / seconds
 
 
 def simd_flags() -> str:
@@ -287,11 +304,11 @@ def main(argv=None) -> int:
         args.size, args.spp, args.ref_spp, args.seconds = (48, 32), 4, 64, 0.5
     import mitsuba as mi
 
-    mi.set_variant("llvm_ad_rgb")
     w, h = args.size
     pixels = w * h
     rows = []
     for kind in args.kinds:
+        mi.set_variant("llvm_ad_rgb")
         ours, md, cam = stage(kind, w, h)
         ours.settings.light_selection = args.light_selection
         ours.settings.sampler = args.sampler
@@ -327,6 +344,7 @@ def main(argv=None) -> int:
         mitsuba_render(mi, mi_ld, spp_ld, 0)  # JIT warm-up of this sampler
         eq_ld, t_eq_ld = mitsuba_render(mi, mi_ld, spp_ld, 4)
         ours_rgb = eq_ours.rgb()
+        mi_scalar_rate = scalar_rate(mi, md, cam, geometry, names, max(1, args.spp))
         rows.append(
             (
                 kind,
@@ -335,6 +353,8 @@ def main(argv=None) -> int:
                 f"{mi_rate / 1e6:.2f}",
                 f"{mi_analytic_rate / 1e6:.2f}",
                 f"{ours_rate / mi_rate:.3f}",
+                f"{mi_scalar_rate / 1e6:.2f}",
+                f"{ours_rate / mi_scalar_rate:.2f}",
                 f"{embree_share:.0%}",
                 f"{eq_ours.stats['spp']} ({eq_ours.stats['time_s']:.1f})",
                 f"{np.sqrt(np.mean((ours_rgb - ref) ** 2)):.4f}",
@@ -352,6 +372,8 @@ def main(argv=None) -> int:
         "Mitsuba, same triangles",
         "Mitsuba, analytic shapes",
         "ours / Mitsuba",
+        "Mitsuba scalar_rgb, same triangles",
+        "ours / Mitsuba scalar_rgb",
         "thread time in Embree",
         "equal time: ours spp (s)",
         "ours RMSE",

@@ -44,5 +44,17 @@ def test_benchmark_runs(name):
     assert r.stdout.strip() and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
+@pytest.mark.mitsuba
+def test_kernel_profile_of_the_peer_runs():
+    """``kernel_profile.py --peer``: Mitsuba's scalar variant profiled (or, without perf,
+    the reason why not)."""
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "kernel_profile.py"),
+                        "--quick", "--peer"], capture_output=True, text=True, timeout=600,
+                       cwd=ROOT, env=checkout_env())
+    assert r.returncode == 0, r.stderr
+    assert "Mitsuba 3 scalar_rgb" in r.stdout or "nothing measured" in r.stdout, r.stdout
+
+
 def test_every_benchmark_is_exercised():
     assert {p.name for p in (ROOT / "benchmarks").glob("*.py")} == set(BENCHMARKS)
