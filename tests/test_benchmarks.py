@@ -26,6 +26,7 @@ BENCHMARKS = {
     "hair.py": ["--quick"],
     "start_up.py": ["--quick"],
     "kernel_profile.py": ["--quick"],
+    "simd_probe.py": ["--quick"],
 }
 
 
