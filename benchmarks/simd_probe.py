@@ -1,30 +1,29 @@
-"""What SIMD shading would buy in numba: one diffuse vertex's shading math, per lane as
-the megakernel runs it, against lanes in a loop that LLVM vectorizes.
+"""What SIMD shading would buy in numba: one diffuse vertex's shading, per lane as the
+megakernel runs it, against lanes in a loop that LLVM vectorizes.
 
-Run ``python benchmarks/simd_probe.py`` (``--quick`` for a smoke run).  The math is a
-diffuse path vertex's: the shading frame from a normal and a tangent, next-event
-estimation toward a light point (distance, cosines, pdfs, the power heuristic) and a
-cosine-weighted direction (Shirley's concentric map, so a sine and a cosine).  It is
-written once (branch-free, in selects: :func:`_make_shade`), and run three ways over
-lanes held as structure of arrays, a block of 4096 lanes that stays in the caches:
+Run ``python benchmarks/simd_probe.py`` (``--quick`` for a smoke run).  A diffuse path
+vertex's shading, from the render core's own kernels: the shading frame
+(:func:`render.df._kernel_common.frame_from_normal_tangent`), next-event estimation
+toward a light point (distance, cosines, pdfs, the power heuristic
+:func:`render.path._power`) and a cosine-weighted direction
+(:func:`render.df._kernel_common.cosine_hemisphere`: Shirley's concentric map, so a
+sine and a cosine).  It runs three ways over lanes held as structure of arrays, a
+block of 4096 lanes that stays in the caches:
 
-* ``per-lane call``: a loop calling a kernel per lane, as the path kernel calls its
-  helpers (one lane at a time, arguments and results through numba's calling
-  convention);
-* ``lane loop``: the same code inlined into the loop over lanes, which LLVM's loop
-  vectorizer turns into AVX-512 (or AVX2) instructions where it can; libm's ``sin`` and
-  ``cos`` stay calls, one lane at a time (pip's llvmlite has no SVML);
+* ``per-lane call``: a loop calling a kernel per lane, which calls the core's kernels as
+  the path kernel does (one lane at a time, arguments and results through numba's
+  calling convention);
+* ``lane loop``: the same kernels' code inlined into the loop over lanes, which LLVM's
+  loop vectorizer turns into AVX-512 (or AVX2) instructions where it can; libm's
+  ``sin`` and ``cos`` stay calls, one lane at a time (pip's llvmlite has no SVML);
 * ``lane loop, polynomial sincos``: the same with a polynomial sine and cosine, which
   vectorize (as Dr.Jit's own do in Mitsuba's LLVM variant).
 
-All in float64 (the kernels' type; numba would promote float32 lanes to float64 at the
-first Python constant).
-
-Printed: nanoseconds a lane (the best of five), the speed-up over the per-lane call,
-the largest difference from the per-lane float64 results (the accuracy paid), and
-whether the loop holds packed square roots (``vsqrtpd``/``vsqrtps``: vectorized).
-This is a probe of code shape, not of the renderer: gathers of hit data, divergent
-materials and Embree's calls are what a real lane-parallel core adds.
+All in float64, the kernels' type.  Printed: nanoseconds a lane (the best of five), the
+speed-up over the per-lane call, the largest difference from the per-lane results (the
+accuracy paid), and whether the loop holds packed square roots (``vsqrtpd``:
+vectorized).  This is a probe of code shape, not of the renderer: gathers of hit data,
+divergent materials and Embree's calls are what a real lane-parallel core adds.
 """
 
 from __future__ import annotations
@@ -33,66 +32,90 @@ import argparse
 import math
 import sys
 import time
+from pathlib import Path
+from types import FunctionType, ModuleType
 
 import numpy as np
 from numba import njit
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from render.df import _kernel_common as kc  # noqa: E402
+from render.path import _power  # noqa: E402
+
 INV_PI = 1.0 / math.pi
-QUARTER_PI = 0.25 * math.pi
+_SQRT_HALF = math.sqrt(0.5)
 
 
-@njit(inline="always", fastmath=True)
-def _poly_sincos(p):
-    """sin and cos of p in [-pi/4, pi/4] by their Taylor series to degree 13 / 12
-    (error below 1e-12 there)."""
-    x2 = p * p
-    s = p * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (
-        1.0 / 362880.0 + x2 * (-1.0 / 39916800.0 + x2 / 6227020800.0))))))
-    c = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (
-        1.0 / 40320.0 + x2 * (-1.0 / 3628800.0 + x2 / 479001600.0)))))
-    return s, c
+def _inlined(kernel, **names):
+    """``kernel``'s own code compiled to be inlined into its caller (so that a loop over
+    lanes can vectorize it), with ``names`` of its globals bound anew."""
+    f = kernel.py_func
+    g = FunctionType(f.__code__, {**f.__globals__, **names}, f.__name__, f.__defaults__)
+    return njit(inline="always", error_model="numpy")(g)
 
 
 @njit(inline="always")
-def _libm_sincos(p):
-    return math.sin(p), math.cos(p)
+def _poly_sincos(d):
+    """sin and cos of d in [-pi/2, pi/2] by their Taylor series to degree 19 / 18
+    (the next terms are below 4e-15 there)."""
+    x2 = d * d
+    s, c = 1.0, 1.0
+    for k in range(9, 0, -1):  # Horner, unrolled by LLVM
+        s = 1.0 - x2 / ((2 * k + 1) * (2 * k)) * s
+        c = 1.0 - x2 / ((2 * k) * (2 * k - 1)) * c
+    return d * s, c
 
 
-def _make_shade(sincos):
-    """The vertex's math with ``sincos`` of an angle in [-pi/4, pi/4]."""
+@njit(inline="always")
+def _poly_cos(x):
+    """cos of x in [-pi/4, 3 pi/4] (the concentric map's angles): about pi/4."""
+    s, c = _poly_sincos(x - 0.25 * math.pi)
+    return _SQRT_HALF * (c - s)
+
+
+@njit(inline="always")
+def _poly_sin(x):
+    """sin of x in [-pi/4, 3 pi/4]."""
+    s, c = _poly_sincos(x - 0.25 * math.pi)
+    return _SQRT_HALF * (s + c)
+
+
+#: ``math`` for :func:`_inlined`, with the polynomial sine and cosine
+POLY_MATH = ModuleType("poly_math")
+POLY_MATH.sin, POLY_MATH.cos, POLY_MATH.sqrt = _poly_sin, _poly_cos, math.sqrt
+
+
+def _make_shade(frame, cosine_hemisphere):
+    """The vertex's shading with these frame and direction kernels."""
 
     @njit(inline="always", error_model="numpy")
     def shade(nx, ny, nz, tx, ty, tz, dx, dy, dz, u1, u2, lx, ly, lz, lnx, lny, lnz):
         """(next-event contribution, sampled direction xyz, its pdf)."""
-        d = tx * nx + ty * ny + tz * nz
-        sx, sy, sz = tx - d * nx, ty - d * ny, tz - d * nz
-        inv = 1.0 / math.sqrt(sx * sx + sy * sy + sz * sz)
-        sx, sy, sz = sx * inv, sy * inv, sz * inv
-        qx, qy, qz = ny * sz - nz * sy, nz * sx - nx * sz, nx * sy - ny * sx
+        sx, sy, sz, qx, qy, qz = frame(nx, ny, nz, tx, ty, tz)
         woz = -(dx * nx + dy * ny + dz * nz)
         d2 = lx * lx + ly * ly + lz * lz
         il = 1.0 / math.sqrt(d2)
         cos_i = (lx * nx + ly * ny + lz * nz) * il
         cos_l = -(lx * lnx + ly * lny + lz * lnz) * il
         pl = d2 / max(cos_l, 1e-8)
-        pb = max(cos_i, 0.0) * INV_PI
-        mis = pl * pl / (pl * pl + pb * pb)
+        mis = _power(pl, max(cos_i, 0.0) * INV_PI)
         lit = (cos_i > 0.0) & (woz > 0.0) & (cos_l > 0.0)
         contrib = INV_PI * cos_i * mis / pl if lit else 0.0
-        # concentric map: phi = pi/4 t where |a| > |b|, else pi/2 - pi/4 t, so the
-        # angle p = +-pi/4 t stays in [-pi/4, pi/4] and the second case is turned by pi/2
-        a, b = 2.0 * u1 - 1.0, 2.0 * u2 - 1.0
-        wide = abs(a) > abs(b)
-        r = a if wide else b
-        t = (b if wide else a) / r if r != 0.0 else 0.0
-        sn, cs = sincos(QUARTER_PI * t if wide else -QUARTER_PI * t)
-        x = r * (cs if wide else -sn)
-        y = r * (sn if wide else cs)
-        z = math.sqrt(max(1.0 - x * x - y * y, 0.0))
+        x, y, z = cosine_hemisphere(u1, u2)
         return (contrib, x * sx + y * qx + z * nx, x * sy + y * qy + z * ny,
                 x * sz + y * qz + z * nz, z * INV_PI)
 
     return shade
+
+
+def _inlined_kernels(math_module):
+    """The frame and direction kernels inlined all the way down, over ``math_module``."""
+    dot3 = _inlined(kc.dot3)
+    unitize = _inlined(kc.unitize, dot3=dot3, math=math_module)
+    frame = _inlined(kc.frame_from_normal_tangent, dot3=dot3, unitize=unitize,
+                     frame_from_normal=_inlined(kc.frame_from_normal))
+    return frame, _inlined(kc.cosine_hemisphere, math=math_module)
 
 
 def _make_loop(shade):
@@ -136,7 +159,7 @@ def timed(loop, a, reps: int) -> tuple[float, np.ndarray]:
 
 def packed_sqrt(loop) -> bool:
     asm = "".join(loop.inspect_asm().values())
-    return "vsqrtpd" in asm or "vsqrtps" in asm
+    return "vsqrtpd" in asm
 
 
 def main(argv=None) -> int:
@@ -147,12 +170,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.quick:
         args.lanes, args.reps = 256, 2
-    libm = _make_shade(_libm_sincos)
-    per_lane = njit(inline="never", error_model="numpy")(libm.py_func)
+    as_is = _make_shade(kc.frame_from_normal_tangent, kc.cosine_hemisphere)
     variants = [
-        ("per-lane call (as the megakernel)", _make_loop(per_lane)),
-        ("lane loop", _make_loop(libm)),
-        ("lane loop, polynomial sincos", _make_loop(_make_shade(_poly_sincos))),
+        ("per-lane call (as the megakernel)",
+         _make_loop(njit(inline="never", error_model="numpy")(as_is.py_func))),
+        ("lane loop", _make_loop(_make_shade(*_inlined_kernels(math)))),
+        ("lane loop, polynomial sincos", _make_loop(_make_shade(*_inlined_kernels(POLY_MATH)))),
     ]
     a = lanes(args.lanes)
     base, ref = None, None
