@@ -73,8 +73,9 @@ def _cases(files):
 
 #: the cases' ids and chi-square pairs, known before the files exist (``make`` reads
 #: ``files`` only when called)
-CASE_IDS = [c.id for c in _cases({})]
-CHI2 = [(c.id, w) for c in _cases({}) if c.chi2 for w in ((0.0, 0.0), (60.0, 200.0))]
+_NO_FILES = _cases({})
+CASE_IDS = [c.id for c in _NO_FILES]
+CHI2 = [(c.id, w) for c in _NO_FILES if c.chi2 for w in ((0.0, 0.0), (60.0, 200.0))]
 
 
 def _case(files, case_id):
