@@ -128,14 +128,11 @@ def child(args) -> None:
     if args.peer:
         import drjit as dr
         import mitsuba as mi
-        from render_vs_mitsuba import mitsuba_render, mitsuba_scene, same_triangles
+        from render_vs_mitsuba import mitsuba_render, scalar_scene
 
-        mi.set_variant("scalar_rgb")
         dr.set_thread_count(1)
         scene, md, cam = stage(args.kind, args.size[0], args.size[1])
-        tri = same_triangles(mi, md, scene.build(), [o.name for o in scene.objects])
-        peer = mitsuba_scene(mi, tri, cam)
-        mitsuba_render(mi, peer, 1, 0)  # warm-up
+        peer = scalar_scene(mi, md, cam, scene.build(), [o.name for o in scene.objects])
         n = 0
 
         def render():

@@ -258,15 +258,20 @@ def same_triangles(mi, md, geometry, names):
 THREADS = 2
 
 
-def scalar_rate(mi, md, cam, geometry, names, spp: int) -> float:
-    """Samples per second of Mitsuba's ``scalar_rgb`` variant (C++, one ray and one
-    lane at a time, Embree 3 underneath, a thread per core) on our triangles: the peer
-    of our scalar kernels, where ``llvm_ad_rgb`` traces and shades 16 lanes at once.
-    Leaves the variant set to ``scalar_rgb``."""
+def scalar_scene(mi, md, cam, geometry, names):
+    """The stage ``md`` on our triangles in Mitsuba's ``scalar_rgb`` variant (C++, one
+    ray and one lane at a time, Embree 3 underneath, a thread per core), rendered once
+    to warm up: the peer of our scalar kernels, where ``llvm_ad_rgb`` traces and shades
+    16 lanes at once.  Leaves the variant set to ``scalar_rgb``."""
     mi.set_variant("scalar_rgb")
     scene = mitsuba_scene(mi, same_triangles(mi, md, geometry, names), cam)
-    mitsuba_render(mi, scene, 1, 0)  # warm-up
-    image, seconds = mitsuba_render(mi, scene, spp, 1)
+    mitsuba_render(mi, scene, 1, 0)
+    return scene
+
+
+def scalar_rate(mi, md, cam, geometry, names, spp: int) -> float:
+    """Samples per second of :func:`scalar_scene`."""
+    image, seconds = mitsuba_render(mi, scalar_scene(mi, md, cam, geometry, names), spp, 1)
     return image.shape[0] * image.shape[1] * spp / seconds
 
 
