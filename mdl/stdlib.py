@@ -4,7 +4,8 @@
 ``::scene`` (MDL 1.7), and the built-in material structs.  Functions are prototypes
 (no body): a back end implements them (``::math`` is :mod:`mdl.mathlib`; the rest are
 the renderer's).  ``::df`` and ``::base`` depend on the renderer's distribution
-functions and library, so the renderer provides them (:mod:`mdl.modules`).
+functions and library, so the renderer provides them (as a provider of
+:class:`mdl.loader.Loader`).
 
 Overload families are written once with placeholders and expanded: ``F`` float and
 double scalars and vectors, ``I`` int scalars and vectors, ``V``/``S`` a vector and

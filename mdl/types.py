@@ -240,7 +240,7 @@ def _builtin_table() -> dict[str, Type]:
 
 _BUILTINS = _builtin_table()
 #: names of the built-in types (material structs and ``intensity_mode`` are added by
-#: :mod:`mdl.builtins`)
+#: the ``builtins`` module of :mod:`mdl.stdlib`)
 BUILTIN_TYPE_NAMES = frozenset(_BUILTINS)
 
 

@@ -425,8 +425,9 @@ def read_exr(path) -> dict[str, np.ndarray]:
 
 
 def empty_aovs(n: int) -> dict:
-    """Every AOV layer (:data:`AOVS`) for ``n`` samples before any hit; the tracers fill
-    them at first hits (:meth:`render.integrator.Integrator.write_aovs`)."""
+    """Every AOV layer (:data:`AOVS`) for ``n`` samples before any hit; the tracer fills
+    them at first hits (:func:`render.path.trace`'s ``aov`` rows, which
+    :meth:`render.integrator.Integrator.trace` returns as these layers)."""
     return {
         "albedo": np.zeros((n, 3)),
         "normal": np.zeros((n, 3)),

@@ -75,6 +75,7 @@ import numpy as np
 from render import embree
 from render import material as M
 from render import path as kern
+from render.df._registry import registry
 from render.film import Film
 from render.frame import Frame, mirror_z
 from render.hair import check_hair_bsdf
@@ -98,14 +99,16 @@ FLAT_LIGHTS = 8
 
 def _straight_through_candidate(material, two_faced: bool) -> bool:
     """Whether a material's surface(s) may pass light straight through without a vertex:
-    ``specular_bsdf`` with a transmitting mode (straight when index-matched or thin)."""
+    one df whose lobes in its mode are deltas that transmit (``specular_bsdf``
+    transmitting: straight when index-matched or thin)."""
     surfaces = [material.surface] + ([material.backface] if two_faced else [])
     for surface in surfaces:
         node = getattr(surface, "scattering", None)
-        if node is None or getattr(node, "name", None) != "specular_bsdf":
+        declared = registry().dfs.get(getattr(node, "name", None))
+        if declared is None:
             return False
         mode = str(node.kwargs.get("mode", "scatter_reflect")).split("::")[-1]
-        if mode not in ("scatter_transmit", "scatter_reflect_transmit"):
+        if not (declared.delta_in(mode) and declared.transmits_in(mode)):
             return False
     return True
 
@@ -348,13 +351,9 @@ class Integrator:
             node = getattr(surface, "scattering", None)
             if node is None or node.is_black:
                 continue
-            for n in _df_nodes(node):
-                if n.name in ("specular_bsdf", "simple_glossy_bsdf",
-                              "backscattering_glossy_reflection_bsdf", "fresnel_layer",
-                              "color_fresnel_layer", "custom_curve_layer",
-                              "color_custom_curve_layer", "diffuse_transmission_bsdf",
-                              "thin_film"):
-                    return True
+            if any(getattr(registry().dfs.get(n.name), "reads_outside_ior", False)
+                   for n in _df_nodes(node)):
+                return True
         return False
 
     def _tables(self, const_emit, obj_medium):
@@ -395,7 +394,7 @@ class Integrator:
             elif self.emit_program[k]:
                 flags[k] |= kern.EMIT_PROG
                 slots = self.programs[2 * n_obj + 2 * k:2 * n_obj + 2 * k + 2]
-                if any(p is not None and np.isin(p.code[:, OP], kern.OBJECT_EDFS).any()
+                if any(p is not None and (kern.OBJECT_TO_LOCAL[p.code[:, OP]] >= 0).any()
                        for p in slots):
                     flags[k] |= kern.EMIT_GLOBAL
                 area = self.emitters[k].area
@@ -841,7 +840,8 @@ def _constant_diffuse_emission(material):
         return None
     emission = material.surface.emission
     edf = emission.emission
-    if getattr(edf, "name", None) != "diffuse_edf" or callable(emission.intensity):
+    declared = registry().dfs.get(getattr(edf, "name", None))
+    if declared is None or not declared.lambertian or callable(emission.intensity):
         return None
     if getattr(material, "thin_walled", False) or _has_cutout(material):
         return None

@@ -7,6 +7,12 @@ that other file changes.  Every compiled kernel of :mod:`render` is declared wit
 is a hash of *all* the package's Python sources: any edit to any of them starts a fresh
 cache (old ones stay until the user deletes them).
 
+Distribution functions may also come from modules outside the package, in the folders
+that ``$PWC_DF_PATH`` lists (:mod:`render.df._registry`); their sources are part of the
+key and their kernels are cached like the package's.  Code that the package generates
+(:func:`generated`: the interpreter's df dispatch) is written to the cache folder and
+cached there too.
+
 The folder is ``$PWC_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/pwc-workbench`` (by
 default ``~/.cache/pwc-workbench``), never the source tree, so a non-editable install
 caches too.  Tests point ``PWC_CACHE_DIR`` at a fresh folder to prove they compile.
@@ -25,33 +31,50 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.util
 import os
+import sys
 import tempfile
 from collections import Counter
 from pathlib import Path
-from types import FunctionType
+from types import FunctionType, ModuleType
 
 import numba
 from numba.core import types
 from numba.core.caching import CacheImpl, _CacheLocator
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["njit", "is_kernel", "instantiate", "cache_dir", "SOURCE_KEY"]
+__all__ = ["njit", "is_kernel", "instantiate", "generated", "cache_dir", "df_path",
+           "SOURCE_KEY"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
 
+def df_path() -> list[Path]:
+    """The ``.py`` files of the df modules in the folders ``$PWC_DF_PATH`` lists
+    (separated by ``os.pathsep``), sorted by folder, then name."""
+    files = []
+    for folder in filter(None, os.environ.get("PWC_DF_PATH", "").split(os.pathsep)):
+        files += sorted(p.resolve() for p in Path(folder).glob("*.py"))
+    return files
+
+
 def _source_key() -> str:
-    """sha256 (16 hex digits) of every ``.py`` file of the package, path and content."""
+    """sha256 (16 hex digits) of every ``.py`` file of the package and of
+    :func:`df_path`, path and content."""
     h = hashlib.sha256()
-    for path in sorted(_PACKAGE.rglob("*.py")):
-        h.update(str(path.relative_to(_PACKAGE)).encode())
+    named = [(p, p.relative_to(_PACKAGE)) for p in sorted(_PACKAGE.rglob("*.py"))]
+    for path, name in named + [(p, Path("ext") / p.name) for p in df_path()]:
+        h.update(str(name).encode())
         h.update(b"\0")
         h.update(path.read_bytes())
         h.update(b"\0")
     return h.hexdigest()[:16]
 
 
+#: files outside the package whose kernels are cached as its own: resolved path ->
+#: a name relative to the cache (the df path's modules, generated modules)
+_OUTSIDE: dict[str, Path] = {str(p): Path("ext") / p.name for p in df_path()}
 #: the key of this tree's sources (part of the cache folder's name)
 SOURCE_KEY = _source_key()
 
@@ -161,6 +184,27 @@ def instantiate(template, module: str, allocates: bool = False, **names):
 _INSTANCES: Counter = Counter()
 
 
+def generated(name: str, source: str) -> ModuleType:
+    """The module ``name`` made of ``source``, Python that the package generated: written
+    to the cache folder (a temporary one where that is not writable) and imported from
+    there, so that a person can read it and its kernels are cached like the package's
+    (the source is a function of the package's, which :data:`SOURCE_KEY` covers)."""
+    folder = cache_dir() / "generated"
+    if not _writable(str(folder)):
+        folder = Path(tempfile.mkdtemp(prefix="pwc-generated-"))
+    path = folder / f"{name}.py"
+    if not path.exists() or path.read_text() != source:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")  # atomic for other processes
+        tmp.write_text(source)
+        os.replace(tmp, path)
+    _OUTSIDE[str(path.resolve())] = Path("generated") / path.name
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 def _in_package(function) -> bool:
     """Whether ``function`` is defined in a file of this package (doctests and
     interactive code are compiled, not cached)."""
@@ -171,7 +215,11 @@ def _in_package(function) -> bool:
 # folder is writable (a temporary file) took 0.1 s of a cached start for ~400 kernels.
 @functools.lru_cache(maxsize=None)
 def _package_path(filename: str) -> Path | None:
-    """``filename`` relative to the package, None outside it."""
+    """``filename`` relative to the package (or its name under the cache for the df
+    path's and generated modules), None outside them."""
+    outside = _OUTSIDE.get(str(Path(filename).resolve()))
+    if outside is not None:
+        return outside
     try:
         return Path(filename).resolve().relative_to(_PACKAGE)
     except (ValueError, OSError):

@@ -46,8 +46,7 @@ from render import light_sampling as ls
 from render.bsdf import Lobe
 from render.camera import camera_ray
 from render.df._kernel_common import frame_from_normal_tangent, unitize
-from render.df.measured_edf import O2L as MEASURED_O2L
-from render.df.spot_edf import SIGNATURE as _SPOT
+from render.df._registry import registry
 from render.hair import hair_hit
 from render.jit import njit
 from render.light_sampling import (
@@ -62,7 +61,7 @@ from render.light_sampling import (
     selection_pdf,
 )
 from render.lights import INFINITE_DISTANCE
-from render.program import BASE, O_MEASURED_EDF, O_SPOT_EDF, OP, SIZE
+from render.program import BASE, OP, SIZE
 from render.sampler import (
     CAMERA_PAIR,
     FIRST_SEGMENT_PAIR,
@@ -96,7 +95,6 @@ __all__ = [
     "escaped",
 ]
 
-SPOT_O2L = _SPOT.offset("object_to_local_00")
 #: a lane may pass through at most this many cutout or null surfaces in a row
 MAX_CROSSINGS = 64
 #: a transmission counts as straight through (a null event) within this 1 - cos
@@ -137,8 +135,9 @@ EMIT_PROG, EMIT_GLOBAL = 128, 256
 #: hair strands (:mod:`render.hair`): the object's primitives are curve segments (rows of
 #: ``curves``), its program (slot 2k) its material's hair bsdf
 HAIR = 512
-#: the edfs whose lobe may be fixed in object space (``object_to_local_ij`` context slots)
-OBJECT_EDFS = np.array([O_SPOT_EDF, O_MEASURED_EDF])
+#: each opcode's slot of ``object_to_local_00`` (-1: none): the edfs whose lobe may be
+#: fixed in object space (``object_to_local_ij`` context slots)
+OBJECT_TO_LOCAL = registry().dispatch().OBJECT_TO_LOCAL
 #: one Embree call in this many is timed (the share of time inside Embree)
 TIMED_EVERY = 16
 
@@ -739,12 +738,10 @@ def _emission(tb, params, ws, ep, k, back, sx, sy, sz, qx, qy, qz, nx, ny, nz, w
         for c in range(params.shape[1]):
             ep[0, c] = params[slot, c]
         for node in range(root - code[root, SIZE] + 1, root + 1):
-            if code[node, OP] == O_SPOT_EDF:
-                o = code[node, BASE] + SPOT_O2L
-            elif code[node, OP] == O_MEASURED_EDF:
-                o = code[node, BASE] + MEASURED_O2L
-            else:
+            o = OBJECT_TO_LOCAL[code[node, OP]]
+            if o < 0:
                 continue
+            o += code[node, BASE]
             for i in range(3):
                 if i == 0:
                     rx, ry, rz = sx, sy, sz

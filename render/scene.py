@@ -1757,7 +1757,8 @@ class _Parser:
 
     def environment_function(self, t: dict, i: int):
         """``type = "environment", function = "base::sun_and_sky(...)"``: an MDL colour
-        function of ``state::direction()`` (:func:`render.mdlc.environment_from_call`)."""
+        function of ``state::direction()``
+        (:func:`render.mdlc.environment.environment_from_call`)."""
         from mdl.diagnostics import MdlError
         from render.mdlc.environment import environment_from_call
 

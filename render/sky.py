@@ -360,7 +360,7 @@ def sun_and_sky_sample(params, p, cdf, u1, u2):
     u1 = kc.clamp_u(u1)
     u2 = kc.clamp_u(u2)
     p_sun = params[_P_SUN]
-    if u1 < p_sun or p_sun >= 1.0:  # render.warp.square_to_uniform_cone, to the sun's frame
+    if u1 < p_sun or p_sun >= 1.0:  # a uniform point of the sun's cone, in the sun's frame
         u0 = u1 / p_sun
         omc = params[_ONE_MINUS_COS]
         z = 1.0 - u0 * omc

@@ -1,12 +1,9 @@
 """Scalar numba helpers shared by the df kernels: orientation, Fresnel, refraction, warps.
 
-The compiled twins, one lane at a time, of :mod:`render.numerics`, :mod:`render.warp`,
-:mod:`render.frame` and :mod:`render.df._common`.  Each helper performs the same IEEE
-operations in the same order as the numpy function it names, so a kernel built from
-them agrees with its earlier numpy class to the last bit (except where numpy's own SIMD
-``exp``/``log``/``sin``/``cos``/``arctan2`` differ from the C library's in the last bit).
-Every helper is total: any finite input gives a finite output, never NaN, never an
-exception (guards as in the numpy code).
+One lane at a time: the kernels call these, and Python code that needs the same maths
+(the tests included) calls them directly, a lane at a time.  Every helper is total: any
+finite input gives a finite output, never NaN, never an exception (each special case is
+guarded explicitly).
 
 Conventions (:mod:`render.frame`): the local frame has ``+z`` along the shading normal,
 ``+z`` is the outside; ``wo`` points toward the viewer, ``wi`` toward the light.  The
@@ -19,6 +16,10 @@ Examples
 >>> F, ct = fresnel_dielectric(1.0, 1.5)
 >>> round(F, 6), ct
 (0.04, -1.0)
+>>> [round(fresnel_dielectric(c, 1.5)[0], 4) for c in (0.3, -0.3)]  # oblique, TIR inside
+[0.2078, 1.0]
+>>> cosine_hemisphere(0.5, 0.5)
+(0.0, 0.0, 1.0)
 >>> flip, z = orient(-0.5)
 >>> flip, z, mirror_z(0.8, flip)
 (True, 0.5, -0.8)
@@ -77,9 +78,9 @@ SPREAD_MIN = float(TOL.spread_min)
 UNIT_MIN = float(TOL.unit_min)
 ONE_MINUS_EPS = float(_ONE_MINUS_EPS)
 PI = float(np.pi)
-#: ``render.df._common.INV_PI`` (``1 / np.pi``)
+#: ``1 / pi``
 INV_PI = 1.0 / PI
-_QUARTER_PI = PI / 4.0  # render.warp._QUARTER_PI
+_QUARTER_PI = PI / 4.0
 
 #: :class:`render.bsdf.Lobe` flag values as ints (a sample kernel's ``lobe``)
 LOBE_DIFFUSE_REFLECTION = int(Lobe.DIFFUSE_REFLECTION)
@@ -109,19 +110,20 @@ def clamp_u(u):
 
 @njit
 def safe_sqrt(x):
-    """``sqrt(max(x, 0))`` (:func:`render.numerics.safe_sqrt`)."""
+    """``sqrt(max(x, 0))``: a square that rounding pushed slightly below 0 gives 0."""
     return math.sqrt(max(x, 0.0))
 
 
 @njit
 def dot3(ax, ay, az, bx, by, bz):
-    """``a . b`` summed as ``(x + z) + y`` (:func:`render.numerics.dot`, einsum's order)."""
+    """``a . b``, summed as ``(x + z) + y`` (numpy einsum's order, kept since the kernels
+    were ported from numpy)."""
     return ax * bx + az * bz + ay * by
 
 
 @njit
 def unitize(x, y, z):
-    """:func:`render.numerics.unitize` of one vector -> ``(ux, uy, uz, valid)``.
+    """One vector normalised -> ``(ux, uy, uz, valid)``.
 
     A vector of ordinary length is divided by its length at once; a tiny or huge one is
     scaled by its largest component first (no overflow or underflow of the squared
@@ -146,7 +148,7 @@ def unitize(x, y, z):
 
 @njit
 def orient(woz):
-    """:func:`render.df._common.orient` for one lane -> ``(flip, |woz|)``.
+    """libbsdf's normal flip for one lane -> ``(flip, |woz|)``.
 
     ``flip`` is ``woz < 0``: the lane is mirrored through the tangent plane so that
     ``wo.z >= 0``.  Mirror the other directions of the lane with :func:`mirror_z`
@@ -171,14 +173,14 @@ def reflect_z(x, y, z):
 
 @njit
 def reflect(kx, ky, kz, mx, my, mz):
-    """``2 (k.m) m - k`` (:func:`render.numerics.reflect`): ``k`` mirrored about unit ``m``."""
+    """``2 (k.m) m - k``: ``k`` mirrored about the unit normal ``m`` (both point away)."""
     c2 = 2.0 * dot3(kx, ky, kz, mx, my, mz)
     return c2 * mx - kx, c2 * my - ky, c2 * mz - kz
 
 
 @njit
 def refract(kx, ky, kz, mx, my, mz, b):
-    """:func:`render.numerics.refract` of one lane -> ``(x, y, z, tir)``.
+    """``k`` refracted through the interface with unit normal ``m`` -> ``(x, y, z, tir)``.
 
     Parameters
     ----------
@@ -211,7 +213,8 @@ def refract(kx, ky, kz, mx, my, mz, b):
 
 @njit
 def fresnel_dielectric(cos_theta_i, eta):
-    """:func:`render.numerics.fresnel_dielectric` of one lane -> ``(F, cos_theta_t)``.
+    """Unpolarised dielectric Fresnel reflectance and the transmitted cosine -> ``(F,
+    cos_theta_t)`` (libbsdf's ``ior_fresnel`` with the special cases made explicit).
 
     Parameters
     ----------
@@ -263,12 +266,14 @@ def fresnel_dielectric3(cos_theta_i, eta0, eta1, eta2):
 
 @njit
 def ior_pair(ior_outside, ior_inside, flip, thin_walled, glossy):
-    """:func:`render.df._common.ior_pair` of one lane -> ``(eta1, eta2)``.
+    """The IORs on ``wo``'s side and on the far side -> ``(eta1, eta2)``.
 
-    ``eta1`` is the IOR on ``wo``'s side, ``eta2`` the far side's.  Lanes viewed from
-    below (``flip``) swap the pair, except on thin-walled surfaces; with ``glossy`` the
-    inside is first pushed ``IOR_DELTA_MIN`` away from the outside (an exact match makes
-    the inside the denser side).
+    ``+z`` is the outside.  Lanes viewed from below (``flip``) swap the pair, except on
+    thin-walled surfaces, where both sides see ``(ior_outside, ior_inside)`` (libbsdf is
+    given ``ior1 = 1, ior2 = material.ior`` for every thin-walled hit).  With ``glossy``
+    the inside is first pushed ``IOR_DELTA_MIN`` away from the outside, before orienting,
+    so both sides see the same interface (libbsdf: at an exact match the transmitted lobe
+    would be a delta; an exact match makes the inside the denser side).
     """
     i = ior_inside
     if glossy:
@@ -285,9 +290,11 @@ def ior_pair(ior_outside, ior_inside, flip, thin_walled, glossy):
 
 @njit
 def cosine_hemisphere(u0, u1):
-    """:func:`render.warp.square_to_cosine_hemisphere` of one lane -> ``(x, y, z)``.
+    """A cosine-weighted direction on the ``+z`` hemisphere from ``u0, u1`` in [0, 1)
+    -> ``(x, y, z)`` (Malley's method).
 
-    Shirley–Chiu concentric disk, lifted to the ``+z`` hemisphere (density ``z / pi``).
+    Shirley–Chiu concentric map of the square onto the unit disk (area-preserving:
+    ``(x, y)`` is uniform on the disk), lifted to the hemisphere (density ``z / pi``).
     """
     a = 2.0 * u0 - 1.0
     b = 2.0 * u1 - 1.0
@@ -345,14 +352,15 @@ def frames_from_normal_tangent(n, tu, s, t):
 
 @njit
 def tangent_axes(tx, ty, tz):
-    """:func:`render.df._common.tangent_axes` of one ``tangent_u`` -> ``(tx, ty, valid)``.
+    """The anisotropy axes in the local frame from one ``tangent_u`` -> ``(tx, ty, valid)``
+    (libbsdf's convention; ``roughness_u`` acts along ``t``).
 
     The anisotropy axis ``t = (tx, ty, 0)`` is ``tangent_u`` projected into the tangent
     plane and normalised (``b = (ty, -tx, 0)``); ``valid`` is False (and ``t = +x``)
     where ``tangent_u`` is parallel to the normal (libbsdf: the lobe absorbs).
     """
     length = math.hypot(tx, ty)
-    full = math.sqrt(tx * tx + ty * ty + tz * tz)
+    full = math.hypot(length, tz)  # no overflow for huge tangents
     if length > 1e-8 * max(full, UNIT_MIN):
         return tx / length, ty / length, True
     return 1.0, 0.0, False

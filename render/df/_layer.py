@@ -142,7 +142,7 @@ def fresnel_eta(ior, ior_outside, woz, flags):
 
 @njit
 def f82_curve1(c, r0, r90, f82, p):
-    """:func:`f82_curve` of one channel (``p`` read as ``max(p, 0)``)."""
+    """The F82-tint Schlick curve of one channel (``p`` read as ``max(p, 0)``)."""
     p = max(p, 0.0)
     cc = min(max(c, 0.0), 1.0)
     base = r0 + (r90 - r0) * math.pow(1.0 - cc, p)

@@ -1,9 +1,9 @@
 """libbsdf's microfacet framework with v-cavities masking, shared by the glossy lobes.
 
-``reference/mdl-distribution-functions.md`` §2.4.  A subclass supplies the normal
-distribution as an object with ``d_cos(ht, hb, hn) -> D(h) (n.h)`` and
-``sample(u2) -> (ht, hb, hn)`` (a density ``D(h) (n.h)`` over half vectors, in the
-anisotropy frame ``t, b, n``) and a ``_table_kind`` for the tabulated albedo.
+``reference/mdl-distribution-functions.md`` §2.4.  Each df module supplies its normal
+distribution ``D(h) (n.h)`` over half vectors (in the anisotropy frame ``t, b, n``) and
+its sampler of them, as kernels; its albedo table is built by
+:func:`render.df._albedo.glossy_albedo_table`.
 
 Notation (after orienting each lane so that ``wo.z > 0``): ``eta1`` is the IOR on
 ``wo``'s side, ``eta2`` the other; ``nk1 = wo.z``; ``tr = wi.z < 0``; ``refr = tr`` and
@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import math
 
+from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import lane_table_albedo, lane_table_average
 from render.df._signature import (
@@ -547,6 +548,10 @@ def microfacet_signature() -> Signature:
         *FILM_PARAMS,
     ), context=("ior_outside", "ior_inside"))
 
+
+#: the lobes of the glossy dfs with scatter modes, by mode
+MICROFACET_LOBES = {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
+                    "scatter_reflect_transmit": Lobe.GLOSSY}
 
 _SIG = microfacet_signature()
 _FILM_D = _SIG.offset("thin_film_thickness")

@@ -1,16 +1,17 @@
-"""The mixing framework shared by the normalized and clamped mixes, and the component structs.
+"""The mixing framework shared by the normalized, clamped and unbounded mixes, and the
+component structs.
 
 ``reference/mdl-distribution-functions.md`` §3.3.  A mix holds components with
-effective weights ``w_i`` (colours, per lane), computed by the subclass from the MDL
-weights (normalised or clamped)::
+effective weights ``w_i`` (colours, per lane), computed by each mix's ``mix_weights``
+kernel from the MDL weights (normalised, clamped or unbounded)::
 
     eval = sum_i w_i eval_i(wo, wi),      pdf = sum_i p_i pdf_i(wo, wi) [w_i eval_i > 0]
 
 Sampling picks component ``i`` with probability ``p_i`` (a defensive mixture of the
-expected contributions ``w_i albedo_i``, :func:`render.df._combine.selection`; libbsdf
+expected contributions ``w_i albedo_i``, :func:`render.interpreter._selection`; libbsdf
 uses ``w_i / sum(w)``), reuses ``u1`` rescaled, and returns ``weight = eval / pdf``
 (delta events: ``w_i weight_i / p_i``); nested combiners sample in one descent and one
-evaluation of the whole tree (``_draw`` and ``_settle``, :mod:`render.df._combine`).
+evaluation of the whole tree (:func:`render.interpreter.sample`).
 ``albedo = sum_i w_i albedo_i`` exactly.
 
 EDF mixes (``normalized_mix`` over ``edf_component``) weight the emission the same way;
@@ -34,6 +35,7 @@ from render.bsdf import (
 from render.df._combine import (
     check_child,
 )
+from render.df._registry import Df
 from render.df._signature import REQUIRED, Param, Signature
 
 __all__ = [
@@ -89,6 +91,10 @@ COLOR_VDF_COMPONENT_SIGNATURE = Signature("color_vdf_component", (
     Param("weight", "color", (0.0, 0.0, 0.0)), Param("component", "vdf", None)))
 #: slots of one packed component (its weight as a colour)
 COMPONENT_WIDTH = 3
+#: the component structs, as the material layer knows them (render.df._registry)
+STRUCTS = tuple(Df(sig.kind, sig, struct=True) for sig in (
+    BSDF_COMPONENT_SIGNATURE, COLOR_BSDF_COMPONENT_SIGNATURE, EDF_COMPONENT_SIGNATURE,
+    COLOR_EDF_COMPONENT_SIGNATURE, VDF_COMPONENT_SIGNATURE, COLOR_VDF_COMPONENT_SIGNATURE))
 
 
 def component_signature(color: bool, edf: bool) -> Signature:

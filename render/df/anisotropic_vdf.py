@@ -45,9 +45,9 @@ import numpy as np
 from render._typing import Arr, ArrayLike, Vec3
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_ANISOTROPIC_VDF, df_class
 
 __all__ = [
     "AnisotropicVdf",
@@ -153,8 +153,10 @@ def _check(values: dict) -> None:
         raise ValueError(f"directional_bias must be in [-1, 1], got {values['directional_bias']!r}")
 
 
-AnisotropicVdf = df_class("AnisotropicVdf", "anisotropic_vdf", O_ANISOTROPIC_VDF, SIGNATURE,
-                          Lobe.DIFFUSE, check=_check, module=__name__)
+NODE = Node("anisotropic_vdf", "vdf", "leaf", SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=albedo)
+DF = Df("anisotropic_vdf", SIGNATURE, (NODE,), lobes=Lobe.DIFFUSE, check=_check)
+AnisotropicVdf = DF.cls
 anisotropic_vdf = AnisotropicVdf
 
 

@@ -45,9 +45,9 @@ from render.df import _glossy_lobe
 from render.df import _kernel_common as kc
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import as_azimuth, ms_lobe, ms_on
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_BACKSCATTERING_GLOSSY, df_class
 
 __all__ = [
     "BackscatteringGlossyReflectionBsdf",
@@ -187,8 +187,9 @@ def albedo_table(row, flags: int = 0) -> np.ndarray:
 
 # --- the Python class ------------------------------------------------------------------
 
-BackscatteringGlossyReflectionBsdf = df_class(
-    "BackscatteringGlossyReflectionBsdf", "backscattering_glossy_reflection_bsdf",
-    O_BACKSCATTERING_GLOSSY, SIGNATURE, Lobe.GLOSSY_REFLECTION,
-    albedo_table=albedo_table, module=__name__)
+NODE = Node("backscattering_glossy_reflection_bsdf", "bsdf", "leaf", SIGNATURE,
+            eval_pdf=eval_pdf, sample=sample, albedo=albedo)
+DF = Df("backscattering_glossy_reflection_bsdf", SIGNATURE, (NODE,),
+        lobes=Lobe.GLOSSY_REFLECTION, albedo_table=albedo_table)
+BackscatteringGlossyReflectionBsdf = DF.cls
 backscattering_glossy_reflection_bsdf = BackscatteringGlossyReflectionBsdf

@@ -44,9 +44,9 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_CHIANG_HAIR, df_class
 
 __all__ = ["ChiangHairBsdf", "chiang_hair_bsdf", "SIGNATURE", "eval_pdf", "sample", "albedo"]
 
@@ -335,6 +335,9 @@ def _check(values: dict) -> None:
                          f"radians, got {values['cuticle_angle']!r}")
 
 
-ChiangHairBsdf = df_class("ChiangHairBsdf", "chiang_hair_bsdf", O_CHIANG_HAIR, SIGNATURE,
-                          Lobe.GLOSSY | Lobe.DIFFUSE_REFLECTION, check=_check, module=__name__)
+NODE = Node("chiang_hair_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=albedo)
+DF = Df("chiang_hair_bsdf", SIGNATURE, (NODE,), lobes=Lobe.GLOSSY | Lobe.DIFFUSE_REFLECTION,
+        check=_check)
+ChiangHairBsdf = DF.cls
 chiang_hair_bsdf = ChiangHairBsdf

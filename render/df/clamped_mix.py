@@ -33,8 +33,9 @@ from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
     bsdf_component,
     mix_signatures,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_CLAMPED_MIX, O_CLAMPED_MIX_EDF, mix_class, mix_dispatch
+from render.program import mix_class, mix_dispatch
 
 __all__ = [
     "clamped_mix",
@@ -85,17 +86,19 @@ def mix_weights(P, row, b, flags, k, i):
 
 # --- the Python classes ----------------------------------------------------------------
 
-ClampedMix = mix_class("ClampedMix", "clamped_mix", O_CLAMPED_MIX, False, False, module=__name__)
-ColorClampedMix = mix_class("ColorClampedMix", "color_clamped_mix", O_CLAMPED_MIX, True, False,
+NODE = Node("clamped_mix", "bsdf", "mix", SIGNATURE, passes_film=True, mix_weights=mix_weights)
+EDF_NODE = Node("clamped_mix_edf", "edf", "mix", EDF_SIGNATURE, mix_weights=mix_weights)
+ClampedMix = mix_class("ClampedMix", "clamped_mix", NODE, False, False, module=__name__)
+ColorClampedMix = mix_class("ColorClampedMix", "color_clamped_mix", NODE, True, False,
                             module=__name__)
-ClampedMixEdf = mix_class("ClampedMixEdf", "clamped_mix", O_CLAMPED_MIX_EDF, False, True,
+ClampedMixEdf = mix_class("ClampedMixEdf", "clamped_mix", EDF_NODE, False, True,
                           module=__name__)
-ColorClampedMixEdf = mix_class("ColorClampedMixEdf", "color_clamped_mix", O_CLAMPED_MIX_EDF,
+ColorClampedMixEdf = mix_class("ColorClampedMixEdf", "color_clamped_mix", EDF_NODE,
                                True, True, module=__name__)
 
-ClampedMixVdf = mix_class("ClampedMixVdf", "clamped_mix", O_CLAMPED_MIX, False, False,
+ClampedMixVdf = mix_class("ClampedMixVdf", "clamped_mix", NODE, False, False,
                       module=__name__, vdf=True)
-ColorClampedMixVdf = mix_class("ColorClampedMixVdf", "color_clamped_mix", O_CLAMPED_MIX,
+ColorClampedMixVdf = mix_class("ColorClampedMixVdf", "color_clamped_mix", NODE,
                            True, False, module=__name__, vdf=True)
 
 
@@ -109,3 +112,8 @@ def color_clamped_mix(components):
     """``df::color_clamped_mix``: per-channel weights, clamped per channel."""
     return mix_dispatch(components, ColorClampedMix, ColorClampedMixEdf,
                         ColorClampedMixVdf)
+
+
+DF = Df("clamped_mix", SIGNATURE, (NODE, EDF_NODE), constructor=clamped_mix)
+COLOR_DF = Df("color_clamped_mix", COLOR_SIGNATURE, (NODE, EDF_NODE),
+              constructor=color_clamped_mix)

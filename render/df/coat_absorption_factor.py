@@ -26,9 +26,9 @@ import math
 import numpy as np
 
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import THIN_WALLED, Param, Signature
 from render.jit import njit
-from render.program import O_COAT_ABSORPTION_FACTOR, df_class
 
 __all__ = ["CoatAbsorptionFactor", "coat_absorption_factor", "SIGNATURE", "scale"]
 
@@ -88,7 +88,7 @@ def _check(values: dict) -> None:
                          f"refraction), got {values['ior']!r}")
 
 
-CoatAbsorptionFactor = df_class("CoatAbsorptionFactor", "coat_absorption_factor",
-                                O_COAT_ABSORPTION_FACTOR, SIGNATURE, check=_check,
-                                module=__name__)
+NODE = Node("coat_absorption_factor", "bsdf", "modifier", SIGNATURE, scale=scale)
+DF = Df("coat_absorption_factor", SIGNATURE, (NODE,), check=_check)
+CoatAbsorptionFactor = DF.cls
 coat_absorption_factor = CoatAbsorptionFactor

@@ -13,7 +13,7 @@ MDL signatures::
                                   float3 normal = state::normal());            // 1.4
 
 Model (libbsdf, ``reference/mdl-distribution-functions.md`` §3.2): the directional
-layering of :class:`render.df._layer.CurveLayer` with the curve::
+layering of :mod:`render.df._layer` with the curve::
 
     C(c) = R0 + (R90 - R0) (1 - saturate(c))^p,
     R0 = saturate(normal_reflectivity), R90 = saturate(grazing_reflectivity), p = max(exponent, 0)
@@ -48,10 +48,10 @@ from __future__ import annotations
 
 from render.df import _curve_layer
 from render.df._layer import curve_geometry, f82_curve1
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
 from render.df.thin_film import FILM_PARAMS, film_shift, schlick_ior
 from render.jit import njit
-from render.program import O_CUSTOM_CURVE_LAYER, df_class
 
 __all__ = [
     "CustomCurveLayer",
@@ -198,9 +198,13 @@ def curve_is_one(P, row, b, flags):
 
 # --- the Python classes ----------------------------------------------------------------
 
-CustomCurveLayer = df_class("CustomCurveLayer", "custom_curve_layer", O_CUSTOM_CURVE_LAYER,
-                            SIGNATURE, module=__name__)
+NODE = Node("custom_curve_layer", "bsdf", "layer", COLOR_SIGNATURE,
+            layer_factors=layer_factors, layer_estimates=layer_estimates,
+            layer_possible=layer_possible, curve_h=curve_h, curve_nk=curve_nk,
+            curve_constant=curve_constant)
+DF = Df("custom_curve_layer", SIGNATURE, (NODE,))
+COLOR_DF = Df("color_custom_curve_layer", COLOR_SIGNATURE, (NODE,))
+CustomCurveLayer = DF.cls
 custom_curve_layer = CustomCurveLayer
-ColorCustomCurveLayer = df_class("ColorCustomCurveLayer", "color_custom_curve_layer",
-                                 O_CUSTOM_CURVE_LAYER, COLOR_SIGNATURE, module=__name__)
+ColorCustomCurveLayer = COLOR_DF.cls
 color_custom_curve_layer = ColorCustomCurveLayer

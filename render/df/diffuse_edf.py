@@ -16,10 +16,9 @@ weight 1.  Only ``+z`` emits (the integrator orients the frame toward the emitti
 from __future__ import annotations
 
 from render.df import _kernel_common as kc
-from render.df._common import INV_PI
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_DIFFUSE_EDF, df_class
 
 __all__ = [
     "DiffuseEdf",
@@ -41,7 +40,7 @@ def edf_eval_pdf(P, row, b, flags, wox, woy, woz):
     ``1/pi`` and ``cos theta / pi`` on the ``+z`` side."""
     if not woz > kc.COS_ZERO:
         return 0.0, 0.0, 0.0, 0.0
-    return INV_PI, INV_PI, INV_PI, woz * INV_PI
+    return kc.INV_PI, kc.INV_PI, kc.INV_PI, woz * kc.INV_PI
 
 
 @njit
@@ -51,10 +50,13 @@ def edf_sample(P, row, b, flags, u1, u2x, u2y):
     x, y, z = kc.cosine_hemisphere(kc.clamp_u(u2x), kc.clamp_u(u2y))
     if not z > kc.COS_ZERO:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    return x, y, z, z * INV_PI, 1.0, 1.0, 1.0
+    return x, y, z, z * kc.INV_PI, 1.0, 1.0, 1.0
 
 
 # --- the Python class ------------------------------------------------------------------
 
-DiffuseEdf = df_class("DiffuseEdf", "diffuse_edf", O_DIFFUSE_EDF, SIGNATURE, module=__name__)
+NODE = Node("diffuse_edf", "edf", "leaf", SIGNATURE, edf_eval_pdf=edf_eval_pdf,
+            edf_sample=edf_sample)
+DF = Df("diffuse_edf", SIGNATURE, (NODE,), lambertian=True)
+DiffuseEdf = DF.cls
 diffuse_edf = DiffuseEdf

@@ -38,10 +38,9 @@ from render.bsdf import (
     Lobe,
 )
 from render.df import _kernel_common as kc
-from render.df._common import INV_PI
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_DIFFUSE_REFLECTION, df_class
 
 __all__ = [
     "DiffuseReflectionBsdf",
@@ -77,7 +76,7 @@ _K_C_AVG = float(_C_AVG)
 
 @njit
 def _g_kernel(mu):
-    """:func:`_g` of one ``mu`` (clamped to [0, 1])."""
+    """The multiple-scattering ``G`` term of one ``mu`` (clamped to [0, 1])."""
     if mu < 0.0:
         mu = 0.0
     elif mu > 1.0:
@@ -131,7 +130,7 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0
-    pdf = wiz * INV_PI
+    pdf = wiz * kc.INV_PI
     return v0 * pdf, v1 * pdf, v2 * pdf, pdf
 
 
@@ -143,7 +142,7 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     v0, v1, v2, valid = _value(P, row, b, wox, woy, woz, wix, wiy, wiz)
     if not valid:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    return (wix, wiy, kc.mirror_z(wiz, flip), wiz * INV_PI, v0, v1, v2,
+    return (wix, wiy, kc.mirror_z(wiz, flip), wiz * kc.INV_PI, v0, v1, v2,
             kc.LOBE_DIFFUSE_REFLECTION)
 
 
@@ -178,9 +177,10 @@ def _rho_lanes(mu, sigma, out):
 
 # --- the Python class ------------------------------------------------------------------
 
-DiffuseReflectionBsdf = df_class("DiffuseReflectionBsdf", "diffuse_reflection_bsdf",
-                                 O_DIFFUSE_REFLECTION, SIGNATURE, Lobe.DIFFUSE_REFLECTION,
-                                 module=__name__)
+NODE = Node("diffuse_reflection_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("diffuse_reflection_bsdf", SIGNATURE, (NODE,), lobes=Lobe.DIFFUSE_REFLECTION)
+DiffuseReflectionBsdf = DF.cls
 diffuse_reflection_bsdf = DiffuseReflectionBsdf
 
 

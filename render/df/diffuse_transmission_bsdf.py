@@ -14,10 +14,9 @@ from __future__ import annotations
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
-from render.df._common import INV_PI
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_DIFFUSE_TRANSMISSION, df_class
 
 __all__ = [
     "DiffuseTransmissionBsdf",
@@ -47,7 +46,7 @@ def eval_pdf(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
     wiz = kc.mirror_z(wiz, flip)
     if not (woz > kc.COS_ZERO and wiz < -kc.COS_ZERO) or (t0 == 0.0 and t1 == 0.0 and t2 == 0.0):
         return 0.0, 0.0, 0.0, 0.0
-    pdf = -wiz * INV_PI
+    pdf = -wiz * kc.INV_PI
     return t0 * pdf, t1 * pdf, t2 * pdf, pdf
 
 
@@ -60,7 +59,7 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y):
     wiz = -wiz
     if not (woz > kc.COS_ZERO and wiz < -kc.COS_ZERO) or (t0 == 0.0 and t1 == 0.0 and t2 == 0.0):
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    return (wix, wiy, kc.mirror_z(wiz, flip), -wiz * INV_PI, t0, t1, t2,
+    return (wix, wiy, kc.mirror_z(wiz, flip), -wiz * kc.INV_PI, t0, t1, t2,
             kc.LOBE_DIFFUSE_TRANSMISSION)
 
 
@@ -74,7 +73,8 @@ def albedo(P, row, b, flags, wox, woy, woz):
 
 # --- the Python class ------------------------------------------------------------------
 
-DiffuseTransmissionBsdf = df_class("DiffuseTransmissionBsdf", "diffuse_transmission_bsdf",
-                                   O_DIFFUSE_TRANSMISSION, SIGNATURE, Lobe.DIFFUSE_TRANSMISSION,
-                                   module=__name__)
+NODE = Node("diffuse_transmission_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("diffuse_transmission_bsdf", SIGNATURE, (NODE,), lobes=Lobe.DIFFUSE_TRANSMISSION)
+DiffuseTransmissionBsdf = DF.cls
 diffuse_transmission_bsdf = DiffuseTransmissionBsdf

@@ -17,7 +17,7 @@ mirrored through the tangent plane first; :func:`render.df._layer.scale_cosine`)
 
 The sample weight is scaled by ``C`` at the sampled direction.  Energy: never more
 than the base (``C <= 1``).  ``albedo`` is exact for a constant curve and otherwise
-integrated through the base's sampler (:data:`render.df._combine.ALBEDO_POINTS` QMC
+integrated through the base's sampler (:data:`render.program.ALBEDO_POINTS` QMC
 points).
 
 Under ``thin_film`` (MDL 1.8) the factor takes the film's change of the reflectance of
@@ -38,10 +38,10 @@ the ``base``.
 from __future__ import annotations
 
 from render.df._layer import f82_curve1, scale_cosine
+from render.df._registry import Df, Node
 from render.df._signature import THIN_WALLED, Param, Signature
 from render.df.thin_film import FILM_PARAMS, edge_tint_ior, film_shift
 from render.jit import njit
-from render.program import O_DIRECTIONAL_FACTOR, O_DIRECTIONAL_FACTOR_EDF, df_class
 
 __all__ = [
     "DirectionalFactor",
@@ -156,10 +156,13 @@ def curve_constant(P, row, b, flags):
 
 # --- the Python class ------------------------------------------------------------------
 
-DirectionalFactor = df_class("DirectionalFactor", "directional_factor", O_DIRECTIONAL_FACTOR,
-                             SIGNATURE, module=__name__)
-DirectionalFactorEdf = df_class("DirectionalFactorEdf", "directional_factor",
-                                O_DIRECTIONAL_FACTOR_EDF, EDF_SIGNATURE, module=__name__)
+NODE = Node("directional_factor", "bsdf", "modifier", SIGNATURE, scale=scale,
+            curve_constant=curve_constant)
+EDF_NODE = Node("directional_factor_edf", "edf", "modifier", EDF_SIGNATURE, directional=False,
+                scale=edf_scale)
+DF = Df("directional_factor", SIGNATURE, (NODE,))
+EDF_DF = Df("directional_factor_edf", EDF_SIGNATURE, (EDF_NODE,), mdl_name="directional_factor")
+DirectionalFactor, DirectionalFactorEdf = DF.cls, EDF_DF.cls
 directional_factor_edf = DirectionalFactorEdf
 
 

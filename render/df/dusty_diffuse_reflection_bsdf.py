@@ -67,9 +67,9 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_DUSTY_DIFFUSE_REFLECTION, df_class
 
 __all__ = [
     "DustyDiffuseReflectionBsdf",
@@ -359,7 +359,9 @@ def albedo_table(row, flags: int = 0) -> np.ndarray:
 
 # --- the Python class ----------------------------------------------------------------------
 
-DustyDiffuseReflectionBsdf = df_class(
-    "DustyDiffuseReflectionBsdf", "dusty_diffuse_reflection_bsdf", O_DUSTY_DIFFUSE_REFLECTION,
-    SIGNATURE, Lobe.DIFFUSE_REFLECTION, albedo_table=albedo_table, module=__name__)
+NODE = Node("dusty_diffuse_reflection_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("dusty_diffuse_reflection_bsdf", SIGNATURE, (NODE,), lobes=Lobe.DIFFUSE_REFLECTION,
+        albedo_table=albedo_table)
+DustyDiffuseReflectionBsdf = DF.cls
 dusty_diffuse_reflection_bsdf = DustyDiffuseReflectionBsdf

@@ -42,9 +42,10 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
+from render.df.anisotropic_vdf import albedo as _vdf_albedo
 from render.jit import njit
-from render.program import O_FOG_VDF, df_class
 
 __all__ = ["FogVdf", "fog_vdf", "SIGNATURE", "eval_pdf", "sample", "fog_parameters", "D_MIN",
            "D_MAX"]
@@ -231,6 +232,8 @@ def _check(values: dict) -> None:
                          f"default), got {values['particle_size']!r}")
 
 
-FogVdf = df_class("FogVdf", "fog_vdf", O_FOG_VDF, SIGNATURE, Lobe.DIFFUSE, check=_check,
-                  module=__name__)
+NODE = Node("fog_vdf", "vdf", "leaf", SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=_vdf_albedo)
+DF = Df("fog_vdf", SIGNATURE, (NODE,), lobes=Lobe.DIFFUSE, check=_check)
+FogVdf = DF.cls
 fog_vdf = FogVdf

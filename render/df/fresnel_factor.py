@@ -28,10 +28,10 @@ import math
 import numpy as np
 
 from render.df._layer import scale_cosine
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
 from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
-from render.program import O_FRESNEL_FACTOR, df_class
 
 __all__ = ["FresnelFactor", "fresnel_factor", "SIGNATURE", "scale", "fresnel_conductor"]
 
@@ -106,6 +106,7 @@ def _check(values: dict) -> None:
                          f"conductor's index of refraction), got {values['ior']!r}")
 
 
-FresnelFactor = df_class("FresnelFactor", "fresnel_factor", O_FRESNEL_FACTOR, SIGNATURE,
-                         check=_check, module=__name__)
+NODE = Node("fresnel_factor", "bsdf", "modifier", SIGNATURE, scale=scale)
+DF = Df("fresnel_factor", SIGNATURE, (NODE,), check=_check)
+FresnelFactor = DF.cls
 fresnel_factor = FresnelFactor

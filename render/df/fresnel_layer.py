@@ -12,7 +12,7 @@ MDL signatures::
 Fresnel **per channel**.
 
 Model (libbsdf, ``reference/mdl-distribution-functions.md`` §3.2): the directional
-layering of :class:`render.df._layer.CurveLayer` with the exact unpolarised dielectric
+layering of :mod:`render.df._layer` with the exact unpolarised dielectric
 Fresnel curve ``C(c) = F(eta, c)`` (libbsdf's ``ior_fresnel``, not Schlick).  The layer's
 ``ior`` replaces the material's on the side the ray comes from: with ``(eta1, eta2)``
 the renderer's IOR pair on ``wo``'s side and the far side, a ray from outside
@@ -46,10 +46,11 @@ from render.df._layer import (
     fresnel_curve,
     fresnel_eta,
 )
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, THIN_WALLED, Param, Signature
 from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
-from render.program import O_FRESNEL_LAYER, check_ior, df_class
+from render.program import check_ior
 
 __all__ = [
     "FresnelLayer",
@@ -165,9 +166,13 @@ def curve_is_one(P, row, b, flags):
 
 # --- the Python classes ----------------------------------------------------------------
 
-FresnelLayer = df_class("FresnelLayer", "fresnel_layer", O_FRESNEL_LAYER, SIGNATURE,
-                        check=check_ior, module=__name__)
+NODE = Node("fresnel_layer", "bsdf", "layer", COLOR_SIGNATURE,
+            layer_factors=layer_factors, layer_estimates=layer_estimates,
+            layer_possible=layer_possible, curve_h=curve_h, curve_nk=curve_nk,
+            curve_constant=curve_constant)
+DF = Df("fresnel_layer", SIGNATURE, (NODE,), check=check_ior)
+COLOR_DF = Df("color_fresnel_layer", COLOR_SIGNATURE, (NODE,), check=check_ior)
+FresnelLayer = DF.cls
 fresnel_layer = FresnelLayer
-ColorFresnelLayer = df_class("ColorFresnelLayer", "color_fresnel_layer", O_FRESNEL_LAYER,
-                             COLOR_SIGNATURE, check=check_ior, module=__name__)
+ColorFresnelLayer = COLOR_DF.cls
 color_fresnel_layer = ColorFresnelLayer

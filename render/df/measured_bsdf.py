@@ -41,6 +41,7 @@ import numpy as np
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._mbsdf import MbsdfError, Measurement, measurement_table, read_mbsdf
+from render.df._registry import Df, Node
 from render.df._signature import (
     MODE_FLAGS,
     MODE_MASK,
@@ -51,7 +52,7 @@ from render.df._signature import (
     Signature,
 )
 from render.jit import njit
-from render.program import FLAGS, O_MEASURED_BSDF, TABLE, Program, ProgramBsdf, leaf_program
+from render.program import FLAGS, TABLE, Program, ProgramBsdf, leaf_program
 
 __all__ = ["MeasuredBsdf", "measured_bsdf", "SIGNATURE", "eval_pdf", "sample", "albedo"]
 
@@ -316,7 +317,7 @@ class MeasuredBsdf(ProgramBsdf):
         if key not in _TABLES or _TABLES[key][0] is not measurement:
             _TABLES[key] = (measurement, *measurement_table(measurement))
         _, table, max_r, max_t = _TABLES[key]
-        prog = leaf_program("bsdf", O_MEASURED_BSDF, SIGNATURE,
+        prog = leaf_program("bsdf", NODE.op, SIGNATURE,
                             {"multiplier": float(mult), "mode": mode}, Lobe.NONE, title)
         flags = int(prog.code[0, FLAGS])
         m = flags & MODE_MASK
@@ -338,5 +339,11 @@ class MeasuredBsdf(ProgramBsdf):
 
 
 measured_bsdf = MeasuredBsdf
+NODE = Node("measured_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=albedo)
+DF = Df("measured_bsdf", SIGNATURE, (NODE,), constructor=MeasuredBsdf,
+        lobes={"scatter_reflect": Lobe.GLOSSY_REFLECTION,
+               "scatter_transmit": Lobe.GLOSSY_TRANSMISSION,
+               "scatter_reflect_transmit": Lobe.GLOSSY})
 
 __all__ += ["MbsdfError", "Measurement", "read_mbsdf"]

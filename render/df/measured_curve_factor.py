@@ -19,9 +19,9 @@ base's sampler (the interpreter's control variate), exact for a constant curve.
 from __future__ import annotations
 
 from render.df._layer import measured_curve3, measured_curve_constant, scale_cosine
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_MEASURED_CURVE_FACTOR, df_class
 
 __all__ = ["MeasuredCurveFactor", "measured_curve_factor", "SIGNATURE", "scale",
            "curve_constant"]
@@ -50,6 +50,8 @@ def curve_constant(P, row, b, flags):
     return measured_curve_constant(P, row, b + _AT, int(P[row, b + _N]))
 
 
-MeasuredCurveFactor = df_class("MeasuredCurveFactor", "measured_curve_factor",
-                               O_MEASURED_CURVE_FACTOR, SIGNATURE, module=__name__)
+NODE = Node("measured_curve_factor", "bsdf", "modifier", SIGNATURE, passes_film=True,
+            scale=scale, curve_constant=curve_constant)
+DF = Df("measured_curve_factor", SIGNATURE, (NODE,))
+MeasuredCurveFactor = DF.cls
 measured_curve_factor = MeasuredCurveFactor

@@ -29,9 +29,9 @@ from __future__ import annotations
 
 from render.df import _curve_layer
 from render.df._layer import curve_geometry, measured_curve3, measured_curve_constant
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_MEASURED_CURVE_LAYER, df_class
 
 __all__ = [
     "MeasuredCurveLayer",
@@ -107,9 +107,13 @@ def curve_constant(P, row, b, flags):
 
 # --- the Python classes ----------------------------------------------------------------
 
-MeasuredCurveLayer = df_class("MeasuredCurveLayer", "measured_curve_layer",
-                              O_MEASURED_CURVE_LAYER, SIGNATURE, module=__name__)
+NODE = Node("measured_curve_layer", "bsdf", "layer", COLOR_SIGNATURE, passes_film=True,
+            layer_factors=layer_factors, layer_estimates=layer_estimates,
+            layer_possible=layer_possible, curve_h=curve_h, curve_nk=curve_nk,
+            curve_constant=curve_constant)
+DF = Df("measured_curve_layer", SIGNATURE, (NODE,))
+COLOR_DF = Df("color_measured_curve_layer", COLOR_SIGNATURE, (NODE,))
+MeasuredCurveLayer = DF.cls
 measured_curve_layer = MeasuredCurveLayer
-ColorMeasuredCurveLayer = df_class("ColorMeasuredCurveLayer", "color_measured_curve_layer",
-                                   O_MEASURED_CURVE_LAYER, COLOR_SIGNATURE, module=__name__)
+ColorMeasuredCurveLayer = COLOR_DF.cls
 color_measured_curve_layer = ColorMeasuredCurveLayer

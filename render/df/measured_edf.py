@@ -48,9 +48,10 @@ import numpy as np
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._ies import IesError, LightProfile, profile_table, read_ies
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_MEASURED_EDF, TABLE, Program, ProgramEdf, leaf_program
+from render.program import TABLE, Program, ProgramEdf, leaf_program
 
 __all__ = ["MeasuredEdf", "measured_edf", "SIGNATURE", "edf_eval_pdf", "edf_sample",
            "table_intensity", "IesError", "LightProfile", "read_ies"]
@@ -322,7 +323,7 @@ class MeasuredEdf(ProgramEdf):
             _TABLES[key] = (profile, profile_table(profile, 1.0))
         table = _TABLES[key][1].copy()
         table[4] *= float(mult)
-        prog = leaf_program("edf", O_MEASURED_EDF, SIGNATURE, values, Lobe.NONE, title)
+        prog = leaf_program("edf", NODE.op, SIGNATURE, values, Lobe.NONE, title)
         code = prog.code.copy()
         code[0, TABLE] = 0
         ProgramEdf.__init__(self, Program("edf", code, prog.kids, prog.frames, prog.blocks, table,
@@ -331,3 +332,6 @@ class MeasuredEdf(ProgramEdf):
 
 
 measured_edf = MeasuredEdf
+NODE = Node("measured_edf", "edf", "leaf", SIGNATURE, edf_eval_pdf=edf_eval_pdf,
+            edf_sample=edf_sample)
+DF = Df("measured_edf", SIGNATURE, (NODE,), constructor=MeasuredEdf)

@@ -21,9 +21,10 @@ import math
 import numpy as np
 
 from render.df._layer import scale_half_vector
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_MEASURED_FACTOR, TABLE, Program, ProgramBsdf, combine
+from render.program import TABLE, Program, ProgramBsdf, combine
 
 __all__ = ["MeasuredFactor", "measured_factor", "SIGNATURE", "scale", "texture_table"]
 
@@ -108,7 +109,7 @@ class MeasuredFactor(ProgramBsdf):
         if base is not None and not isinstance(base, ProgramBsdf):
             raise ValueError(f"{title}(base) must be a bound bsdf or None for MDL's black "
                              f"bsdf(), got {type(base).__name__}")
-        prog = combine("bsdf", O_MEASURED_FACTOR, np.zeros((1, 0)), 0,
+        prog = combine("bsdf", NODE.op, np.zeros((1, 0)), 0,
                        [None if base is None else base.program])
         code = prog.code.copy()
         code[prog.root, TABLE] = len(prog.tables)
@@ -118,3 +119,5 @@ class MeasuredFactor(ProgramBsdf):
 
 
 measured_factor = MeasuredFactor
+NODE = Node("measured_factor", "bsdf", "modifier", SIGNATURE, passes_film=True, scale=scale)
+DF = Df("measured_factor", SIGNATURE, (NODE,), constructor=MeasuredFactor)

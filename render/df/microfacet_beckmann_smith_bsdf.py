@@ -39,11 +39,11 @@ BSDFs using the distribution of visible normals" (2014)."""
 
 from __future__ import annotations
 
-from render.bsdf import Lobe
 from render.df import _glossy_lobe
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     BECKMANN,
+    MICROFACET_LOBES,
     SMITH,
     mf_ms_lobe,
     mf_setup,
@@ -51,8 +51,8 @@ from render.df._microfacet import (
     mf_value,
     microfacet_signature,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_MICROFACET_BECKMANN_SMITH, df_class
 
 __all__ = [
     "MicrofacetBeckmannSmithBsdf",
@@ -88,10 +88,9 @@ def albedo_table(row, flags: int):
 
 # --- the Python class ------------------------------------------------------------------
 
-MicrofacetBeckmannSmithBsdf = df_class(
-    "MicrofacetBeckmannSmithBsdf", "microfacet_beckmann_smith_bsdf", O_MICROFACET_BECKMANN_SMITH,
-    SIGNATURE,
-    {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
-     "scatter_reflect_transmit": Lobe.GLOSSY},
-    albedo_table=albedo_table, module=__name__)
+NODE = Node("microfacet_beckmann_smith_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("microfacet_beckmann_smith_bsdf", SIGNATURE, (NODE,), lobes=MICROFACET_LOBES,
+        albedo_table=albedo_table)
+MicrofacetBeckmannSmithBsdf = DF.cls
 microfacet_beckmann_smith_bsdf = MicrofacetBeckmannSmithBsdf

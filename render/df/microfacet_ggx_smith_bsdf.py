@@ -37,11 +37,11 @@ References: Walter et al., "Microfacet models for refraction through rough surfa
 
 from __future__ import annotations
 
-from render.bsdf import Lobe
 from render.df import _glossy_lobe
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     GGX,
+    MICROFACET_LOBES,
     SMITH,
     mf_ms_lobe,
     mf_setup,
@@ -49,8 +49,8 @@ from render.df._microfacet import (
     mf_value,
     microfacet_signature,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_MICROFACET_GGX_SMITH, df_class
 
 __all__ = [
     "MicrofacetGgxSmithBsdf",
@@ -86,10 +86,9 @@ def albedo_table(row, flags: int):
 
 # --- the Python class ------------------------------------------------------------------
 
-MicrofacetGgxSmithBsdf = df_class(
-    "MicrofacetGgxSmithBsdf", "microfacet_ggx_smith_bsdf", O_MICROFACET_GGX_SMITH,
-    SIGNATURE,
-    {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
-     "scatter_reflect_transmit": Lobe.GLOSSY},
-    albedo_table=albedo_table, module=__name__)
+NODE = Node("microfacet_ggx_smith_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("microfacet_ggx_smith_bsdf", SIGNATURE, (NODE,), lobes=MICROFACET_LOBES,
+        albedo_table=albedo_table)
+MicrofacetGgxSmithBsdf = DF.cls
 microfacet_ggx_smith_bsdf = MicrofacetGgxSmithBsdf

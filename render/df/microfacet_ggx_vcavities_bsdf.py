@@ -38,11 +38,11 @@ References: Walter et al. (2007); Heitz & d'Eon (2014).
 
 from __future__ import annotations
 
-from render.bsdf import Lobe
 from render.df import _glossy_lobe
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     GGX,
+    MICROFACET_LOBES,
     VCAVITIES,
     mf_ms_lobe,
     mf_setup,
@@ -50,8 +50,8 @@ from render.df._microfacet import (
     mf_value,
     microfacet_signature,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_MICROFACET_GGX_VCAVITIES, df_class
 
 __all__ = [
     "MicrofacetGgxVcavitiesBsdf",
@@ -87,10 +87,9 @@ def albedo_table(row, flags: int):
 
 # --- the Python class ------------------------------------------------------------------
 
-MicrofacetGgxVcavitiesBsdf = df_class(
-    "MicrofacetGgxVcavitiesBsdf", "microfacet_ggx_vcavities_bsdf", O_MICROFACET_GGX_VCAVITIES,
-    SIGNATURE,
-    {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
-     "scatter_reflect_transmit": Lobe.GLOSSY},
-    albedo_table=albedo_table, module=__name__)
+NODE = Node("microfacet_ggx_vcavities_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo)
+DF = Df("microfacet_ggx_vcavities_bsdf", SIGNATURE, (NODE,), lobes=MICROFACET_LOBES,
+        albedo_table=albedo_table)
+MicrofacetGgxVcavitiesBsdf = DF.cls
 microfacet_ggx_vcavities_bsdf = MicrofacetGgxVcavitiesBsdf

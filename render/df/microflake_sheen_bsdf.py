@@ -57,16 +57,10 @@ import numpy as np
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
 from render.df._microflake_sheen_table import LTC, N_ALPHA, N_MU
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import (
-    O_MICROFLAKE_SHEEN,
-    O_SHEEN_LAYER,
-    ProgramBsdf,
-    combine,
-    df_class,
-    pack,
-)
+from render.program import ProgramBsdf, combine, df_class, pack
 
 __all__ = ["MicroflakeSheenBsdf", "microflake_sheen_bsdf", "SIGNATURE", "LOBE_SIGNATURE",
            "eval_pdf", "sample", "albedo", "white_albedo", "ltc_coefficients", "albedo_table"]
@@ -190,7 +184,7 @@ def sample(P, row, b, flags, wox, woy, woz, u1, u2x, u2y, tables, t):
 
 
 @njit
-def white_albedo(P, row, b, ox, oy, oz, tables, t):
+def white_albedo(P, row, b, flags, ox, oy, oz, tables, t):
     """The sheen lobe's white directional albedo ``E(wo) = c(|wo.z|)`` (0 where the lobe
     is absent)."""
     mu = abs(oz)
@@ -203,7 +197,7 @@ def white_albedo(P, row, b, ox, oy, oz, tables, t):
 @njit
 def albedo(P, row, b, flags, wox, woy, woz, tables, t):
     """``tint c(|wo.z|)``: exact for this lobe -> ``(a0, a1, a2)``."""
-    e = white_albedo(P, row, b, wox, woy, woz, tables, t)
+    e = white_albedo(P, row, b, flags, wox, woy, woz, tables, t)
     return P[row, b + _TINT] * e, P[row, b + _TINT + 1] * e, P[row, b + _TINT + 2] * e
 
 
@@ -215,9 +209,12 @@ def albedo_table(row, flags: int = 0) -> np.ndarray:
 
 
 # --- the Python class ------------------------------------------------------------------
-_Lobe = df_class("MicroflakeSheenLobe", "microflake_sheen_bsdf", O_MICROFLAKE_SHEEN,
-                 LOBE_SIGNATURE, Lobe.GLOSSY_REFLECTION, albedo_table=albedo_table,
-                 module=__name__)
+#: the sheen lobe (a leaf; over another bsdf, the sheen layer of render.df.sheen_bsdf)
+NODE = Node("microflake_sheen_bsdf", "bsdf", "leaf", LOBE_SIGNATURE, eval_pdf=eval_pdf,
+            sample=sample, albedo=albedo, white_albedo=white_albedo)
+_Lobe = df_class(Df("microflake_sheen_bsdf", LOBE_SIGNATURE, (NODE,),
+                    py_name="MicroflakeSheenLobe", lobes=Lobe.GLOSSY_REFLECTION,
+                    albedo_table=albedo_table))
 
 
 class _DefaultDiffuse:
@@ -243,7 +240,7 @@ class MicroflakeSheenBsdf(ProgramBsdf):
 
     def __init__(self, roughness, tint=(1.0, 1.0, 1.0), multiscatter_tint=(0.0, 0.0, 0.0),
                  multiscatter=DEFAULT_MULTISCATTER):
-        from render.df.sheen_bsdf import LAYER_SIGNATURE
+        from render.df.sheen_bsdf import LAYER_NODE, LAYER_SIGNATURE
 
         title = "df::microflake_sheen_bsdf"
         lobe = _Lobe(roughness, tint)
@@ -259,10 +256,12 @@ class MicroflakeSheenBsdf(ProgramBsdf):
         if multiscatter is None or not np.any(cols > 0.0):
             program = lobe.program  # nothing reaches the multiscatter bsdf
         else:
-            program = combine("bsdf", O_SHEEN_LAYER, cols, flags,
+            program = combine("bsdf", LAYER_NODE.op, cols, flags,
                               [lobe.program, multiscatter.program])
         ProgramBsdf.__init__(self, program)
         self.multiscatter = multiscatter
 
 
 microflake_sheen_bsdf = MicroflakeSheenBsdf
+DF = Df("microflake_sheen_bsdf", SIGNATURE, (NODE,), lobes=Lobe.GLOSSY_REFLECTION,
+        constructor=MicroflakeSheenBsdf)

@@ -34,8 +34,9 @@ from render.df._mix import (
     edf_component,
     mix_signatures,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_NORMALIZED_MIX, O_NORMALIZED_MIX_EDF, mix_class, mix_dispatch
+from render.program import mix_class, mix_dispatch
 
 __all__ = [
     "normalized_mix",
@@ -87,18 +88,20 @@ def mix_weights(P, row, b, flags, k, i):
 
 # --- the Python classes ----------------------------------------------------------------
 
-NormalizedMix = mix_class("NormalizedMix", "normalized_mix", O_NORMALIZED_MIX, False, False,
+NODE = Node("normalized_mix", "bsdf", "mix", SIGNATURE, passes_film=True, mix_weights=mix_weights)
+EDF_NODE = Node("normalized_mix_edf", "edf", "mix", EDF_SIGNATURE, mix_weights=mix_weights)
+NormalizedMix = mix_class("NormalizedMix", "normalized_mix", NODE, False, False,
                           module=__name__)
 ColorNormalizedMix = mix_class("ColorNormalizedMix", "color_normalized_mix",
-                               O_NORMALIZED_MIX, True, False, module=__name__)
-NormalizedMixEdf = mix_class("NormalizedMixEdf", "normalized_mix", O_NORMALIZED_MIX_EDF,
+                               NODE, True, False, module=__name__)
+NormalizedMixEdf = mix_class("NormalizedMixEdf", "normalized_mix", EDF_NODE,
                              False, True, module=__name__)
 ColorNormalizedMixEdf = mix_class("ColorNormalizedMixEdf", "color_normalized_mix",
-                                  O_NORMALIZED_MIX_EDF, True, True, module=__name__)
+                                  EDF_NODE, True, True, module=__name__)
 
-NormalizedMixVdf = mix_class("NormalizedMixVdf", "normalized_mix", O_NORMALIZED_MIX, False, False,
+NormalizedMixVdf = mix_class("NormalizedMixVdf", "normalized_mix", NODE, False, False,
                       module=__name__, vdf=True)
-ColorNormalizedMixVdf = mix_class("ColorNormalizedMixVdf", "color_normalized_mix", O_NORMALIZED_MIX,
+ColorNormalizedMixVdf = mix_class("ColorNormalizedMixVdf", "color_normalized_mix", NODE,
                            True, False, module=__name__, vdf=True)
 
 
@@ -112,3 +115,8 @@ def color_normalized_mix(components):
     """``df::color_normalized_mix``: per-channel weights, normalised per channel."""
     return mix_dispatch(components, ColorNormalizedMix, ColorNormalizedMixEdf,
                         ColorNormalizedMixVdf)
+
+
+DF = Df("normalized_mix", SIGNATURE, (NODE, EDF_NODE), constructor=normalized_mix)
+COLOR_DF = Df("color_normalized_mix", COLOR_SIGNATURE, (NODE, EDF_NODE),
+              constructor=color_normalized_mix)

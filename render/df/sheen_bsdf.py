@@ -47,16 +47,10 @@ from render.df._microfacet import (
     ms_lobe,
     ms_on,
 )
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import (
-    O_SHEEN,
-    O_SHEEN_LAYER,
-    ProgramBsdf,
-    combine,
-    df_class,
-    pack,
-)
+from render.program import ProgramBsdf, combine, df_class, pack
 
 __all__ = ["SheenBsdf", "sheen_bsdf", "SIGNATURE", "LAYER_SIGNATURE", "eval_pdf", "sample",
            "albedo", "albedo_table", "white_albedo", "layer_factors", "layer_estimates",
@@ -137,7 +131,7 @@ eval_pdf, sample, albedo, sample_weights = _glossy_lobe.kernels(__name__)
 
 
 @njit
-def white_albedo(P, row, b, ox, oy, oz, T, t):
+def white_albedo(P, row, b, flags, ox, oy, oz, T, t):
     """The sheen lobe's white directional albedo ``E(wo)`` from its node table."""
     r = max(P[row, b + _R], kc.ROUGHNESS_MIN)
     if not abs(oz) > kc.COS_ZERO:
@@ -181,8 +175,14 @@ def layer_possible(P, row, b, flags):
 
 
 # --- the Python class ------------------------------------------------------------------
-_SheenLobe = df_class("SheenLobe", "sheen_bsdf", O_SHEEN, LOBE_SIGNATURE,
-                      Lobe.GLOSSY_REFLECTION, albedo_table=albedo_table, module=__name__)
+#: the sheen lobe (a leaf), and the layer of it over another bsdf (Ĉ: the lobe's E)
+NODE = Node("sheen_bsdf", "bsdf", "leaf", LOBE_SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=albedo, white_albedo=white_albedo)
+LAYER_NODE = Node("sheen_layer", "bsdf", "layer", LAYER_SIGNATURE, chat_from_lobe=True,
+                  layer_factors=layer_factors, layer_estimates=layer_estimates,
+                  layer_possible=layer_possible)
+_SheenLobe = df_class(Df("sheen_bsdf", LOBE_SIGNATURE, (NODE,), py_name="SheenLobe",
+                         lobes=Lobe.GLOSSY_REFLECTION, albedo_table=albedo_table))
 
 
 class _DefaultDiffuse:
@@ -232,10 +232,12 @@ class SheenBsdf(ProgramBsdf):
             else:
                 cols, flags = pack(LAYER_SIGNATURE, {"multiscatter_tint": multiscatter_tint},
                                    title)
-                program = combine("bsdf", O_SHEEN_LAYER, cols, flags,
+                program = combine("bsdf", LAYER_NODE.op, cols, flags,
                                   [lobe.program, multiscatter.program])
         ProgramBsdf.__init__(self, program)
         self.multiscatter = multiscatter
 
 
 sheen_bsdf = SheenBsdf
+DF = Df("sheen_bsdf", SIGNATURE, (NODE, LAYER_NODE), lobes=Lobe.GLOSSY_REFLECTION,
+        constructor=SheenBsdf)

@@ -50,11 +50,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from render.bsdf import Lobe
 from render.df import _glossy_lobe
 from render.df._albedo import glossy_albedo_table
 from render.df._microfacet import (
     ASHIKHMIN_SHIRLEY,
+    MICROFACET_LOBES,
     VCAVITIES,
     mf_ms_lobe,
     mf_setup,
@@ -62,8 +62,8 @@ from render.df._microfacet import (
     mf_value,
     microfacet_signature,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_SIMPLE_GLOSSY, df_class
 
 __all__ = [
     "SimpleGlossyBsdf",
@@ -99,9 +99,8 @@ def albedo_table(row, flags: int) -> np.ndarray:
 
 # --- the Python class ------------------------------------------------------------------
 
-SimpleGlossyBsdf = df_class(
-    "SimpleGlossyBsdf", "simple_glossy_bsdf", O_SIMPLE_GLOSSY, SIGNATURE,
-    {"scatter_reflect": Lobe.GLOSSY_REFLECTION, "scatter_transmit": Lobe.GLOSSY,
-     "scatter_reflect_transmit": Lobe.GLOSSY},
-    albedo_table=albedo_table, module=__name__)
+NODE = Node("simple_glossy_bsdf", "bsdf", "leaf", SIGNATURE, eval_pdf=eval_pdf, sample=sample,
+            albedo=albedo)
+DF = Df("simple_glossy_bsdf", SIGNATURE, (NODE,), lobes=MICROFACET_LOBES, albedo_table=albedo_table)
+SimpleGlossyBsdf = DF.cls
 simple_glossy_bsdf = SimpleGlossyBsdf

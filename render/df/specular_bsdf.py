@@ -34,6 +34,7 @@ import numpy as np
 
 from render.bsdf import Lobe
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import (
     MODE_MASK,
     REFLECT,
@@ -45,7 +46,6 @@ from render.df._signature import (
 )
 from render.df.thin_film import FILM_PARAMS, film_rgb
 from render.jit import njit
-from render.program import O_SPECULAR, df_class
 
 __all__ = [
     "SpecularBsdf",
@@ -150,8 +150,10 @@ def albedo(P, row, b, flags, wox, woy, woz):
 
 # --- the Python class ------------------------------------------------------------------
 
-SpecularBsdf = df_class("SpecularBsdf", "specular_bsdf", O_SPECULAR, SIGNATURE,
-                        {"scatter_reflect": Lobe.SPECULAR_REFLECTION,
+NODE = Node("specular_bsdf", "bsdf", "leaf", SIGNATURE,
+            mirror=True, eval_pdf=eval_pdf, sample=sample, albedo=albedo)
+DF = Df("specular_bsdf", SIGNATURE, (NODE,), lobes={"scatter_reflect": Lobe.SPECULAR_REFLECTION,
                          "scatter_transmit": Lobe.SPECULAR,
-                         "scatter_reflect_transmit": Lobe.SPECULAR}, module=__name__)
+                         "scatter_reflect_transmit": Lobe.SPECULAR})
+SpecularBsdf = DF.cls
 specular_bsdf = SpecularBsdf

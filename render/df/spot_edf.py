@@ -33,10 +33,11 @@ import math
 import numpy as np
 
 from render.df import _kernel_common as kc
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
 from render.numerics import TOL
-from render.program import BASE, O_SPOT_EDF, df_class
+from render.program import BASE, df_class
 
 __all__ = [
     "SpotEdf",
@@ -188,8 +189,9 @@ def _check(values: dict) -> None:
                              "axis); give a rotation")
 
 
-_SpotEdf = df_class("SpotEdf", "spot_edf", O_SPOT_EDF, SIGNATURE, check=_check,
-                    module=__name__)
+NODE = Node("spot_edf", "edf", "leaf", SIGNATURE, edf_eval_pdf=edf_eval_pdf,
+            edf_sample=edf_sample)
+_SpotEdf = df_class(Df("spot_edf", SIGNATURE, (NODE,), check=_check))
 
 
 class SpotEdf(_SpotEdf):
@@ -214,3 +216,4 @@ class SpotEdf(_SpotEdf):
 
 
 spot_edf = SpotEdf
+DF = Df("spot_edf", SIGNATURE, (NODE,), constructor=SpotEdf)

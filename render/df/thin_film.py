@@ -59,6 +59,7 @@ import math
 
 import numpy as np
 
+from render.df._registry import Df
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
 
@@ -184,49 +185,17 @@ def edge_tint_ior(r, g):
 
 
 # --- the bind-time rewrite ---------------------------------------------------------------
-def _film_ops():
-    from render import program as pg
-
-    stop = {pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_CUSTOM_CURVE_LAYER,
-            pg.O_DIRECTIONAL_FACTOR, pg.O_SPECULAR, pg.O_SIMPLE_GLOSSY,
-            pg.O_MICROFACET_GGX_SMITH, pg.O_MICROFACET_BECKMANN_SMITH,
-            pg.O_MICROFACET_GGX_VCAVITIES, pg.O_MICROFACET_BECKMANN_VCAVITIES}
-    through = {pg.O_TINT, pg.O_TINT_RT, pg.O_NORMALIZED_MIX, pg.O_CLAMPED_MIX,
-               pg.O_UNBOUNDED_MIX, pg.O_WEIGHTED_LAYER, pg.O_MEASURED_CURVE_LAYER,
-               pg.O_MEASURED_CURVE_FACTOR, pg.O_MEASURED_FACTOR}
-    return stop, through
-
-
-def _film_offset(op) -> int:
-    import sys
-
-    from render import program as pg
-
-    if op == pg.O_FRESNEL_LAYER:
-        sig = sys.modules["render.df.fresnel_layer"].COLOR_SIGNATURE
-    elif op == pg.O_FRESNEL_FACTOR:
-        sig = sys.modules["render.df.fresnel_factor"].SIGNATURE
-    elif op == pg.O_CUSTOM_CURVE_LAYER:  # the float form packs as the colour form
-        sig = sys.modules["render.df.custom_curve_layer"].COLOR_SIGNATURE
-    elif op == pg.O_DIRECTIONAL_FACTOR:
-        sig = sys.modules["render.df.directional_factor"].SIGNATURE
-    elif op == pg.O_SPECULAR:
-        sig = sys.modules["render.df.specular_bsdf"].SIGNATURE
-    else:  # the glossy lobes share MDL's glossy signature
-        sig = sys.modules["render.df._microfacet"].microfacet_signature()
-    return sig.offset("thin_film_thickness")
-
-
 def _wants_table(prog, k: int) -> bool:
     """Whether the curve layer ``k`` needs a Ĉ table once its curve varies (a constant
     curve had none): it has a layer child that is not a mirror (as
     :func:`render.program._with_chat_table` decides)."""
     from render import program as pg
+    from render.df._registry import registry
 
     lay = prog.kids[prog.code[k, pg.KID0]]
     if lay < 0:
         return False
-    return not (prog.code[lay, pg.OP] == pg.O_SPECULAR
+    return not (registry().nodes[prog.code[lay, pg.OP] - 1].mirror
                 and (prog.code[lay, pg.FLAGS] & 3) == 0)
 
 
@@ -238,6 +207,7 @@ class ThinFilm:
     def __new__(cls, thickness, ior, base):
         from render import interpreter
         from render import program as pg
+        from render.df._registry import registry
 
         title = "df::thin_film"
         if base is None:
@@ -254,26 +224,25 @@ class ThinFilm:
         rows = pg._rows([prog.P, d, n])
         P = np.array(np.broadcast_to(prog.P, (rows, prog.P.shape[1])))
         code = prog.code.copy()
-        stop, through = _film_ops()
+        nodes = registry().nodes
         hit = []
         todo = [prog.root]
         while todo:
             k = todo.pop()
-            op = code[k, pg.OP]
-            if op in stop:
-                if op not in (pg.O_FRESNEL_LAYER, pg.O_FRESNEL_FACTOR, pg.O_CUSTOM_CURVE_LAYER,
-                              pg.O_DIRECTIONAL_FACTOR) and (code[k, pg.FLAGS] & 3) != 2:
+            node = nodes[code[k, pg.OP] - 1]
+            if node.film >= 0:
+                if not node.film_always and (code[k, pg.FLAGS] & 3) != 2:
                     continue  # a plain reflect or transmit lobe has no Fresnel to change
-                at = code[k, pg.BASE] + _film_offset(op)
+                at = code[k, pg.BASE] + node.film
                 P[:, at] = np.broadcast_to(d, (rows, 1))[:, 0]
                 P[:, at + 1:at + 4] = np.broadcast_to(n, (rows, 3))
                 hit.append(k)
-            elif op in through:
+            elif node.passes_film:
                 k0 = code[k, pg.KID0]
                 todo.extend(int(c) for c in prog.kids[k0:k0 + code[k, pg.NKIDS]] if c >= 0)
         tables = prog.tables
         for k in hit:  # the coat's curve changed: its Ĉ table with it
-            if code[k, pg.OP] not in (pg.O_FRESNEL_LAYER, pg.O_CUSTOM_CURVE_LAYER):
+            if nodes[code[k, pg.OP] - 1].role != "layer":
                 continue
             if not np.any(d > 0.0):
                 continue  # no film: the curve and its table stand
@@ -302,3 +271,4 @@ def thin_film(thickness, ior, base):
 
 
 thin_film.mdl_name = "thin_film"
+DF = Df("thin_film", SIGNATURE, constructor=thin_film)

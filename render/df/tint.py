@@ -29,9 +29,9 @@ Examples
 
 from __future__ import annotations
 
+from render.df._registry import Df, Node
 from render.df._signature import REQUIRED, Param, Signature
 from render.jit import njit
-from render.program import O_TINT, O_TINT_EDF, O_TINT_RT, df_class
 
 __all__ = [
     "Tint",
@@ -97,10 +97,17 @@ def scale_rt(P, row, b, flags, wox, woy, woz, wix, wiy, wiz):
 
 # --- the Python classes ----------------------------------------------------------------
 
-Tint = df_class("Tint", "tint", O_TINT, SIGNATURE, module=__name__)
-TintRt = df_class("TintRt", "tint", O_TINT_RT, RT_SIGNATURE, module=__name__)
-TintEdf = df_class("TintEdf", "tint", O_TINT_EDF, EDF_SIGNATURE, module=__name__)
-TintVdf = df_class("TintVdf", "tint", O_TINT, VDF_SIGNATURE, module=__name__)
+#: a bsdf's or a vdf's tint (one factor, whatever the directions)
+NODE = Node("tint", "bsdf", "modifier", SIGNATURE, directional=False, passes_film=True,
+            scale=scale)
+RT_NODE = Node("tint_rt", "bsdf", "modifier", RT_SIGNATURE, passes_film=True, scale=scale_rt)
+EDF_NODE = Node("tint_edf", "edf", "modifier", EDF_SIGNATURE, directional=False, scale=scale)
+# MDL's overloads of tint, in the order a call tries them
+DF = Df("tint", SIGNATURE, (NODE,))
+RT_DF = Df("tint_rt", RT_SIGNATURE, (RT_NODE,), mdl_name="tint")
+EDF_DF = Df("tint_edf", EDF_SIGNATURE, (EDF_NODE,), mdl_name="tint")
+VDF_DF = Df("tint_vdf", VDF_SIGNATURE, (NODE,), mdl_name="tint")
+Tint, TintRt, TintEdf, TintVdf = DF.cls, RT_DF.cls, EDF_DF.cls, VDF_DF.cls
 tint_rt, tint_edf, tint_vdf = TintRt, TintEdf, TintVdf
 
 

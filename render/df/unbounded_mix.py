@@ -30,8 +30,9 @@ from render.df._mix import (  # noqa: F401 - bsdf_component: used in doctests
     bsdf_component,
     mix_signatures,
 )
+from render.df._registry import Df, Node
 from render.jit import njit
-from render.program import O_UNBOUNDED_MIX, O_UNBOUNDED_MIX_EDF, mix_class, mix_dispatch
+from render.program import mix_class, mix_dispatch
 
 __all__ = [
     "unbounded_mix",
@@ -61,18 +62,20 @@ def mix_weights(P, row, b, flags, k, i):
     return max(P[row, at], 0.0), max(P[row, at + 1], 0.0), max(P[row, at + 2], 0.0)
 
 
-UnboundedMix = mix_class("UnboundedMix", "unbounded_mix", O_UNBOUNDED_MIX, False, False,
+NODE = Node("unbounded_mix", "bsdf", "mix", SIGNATURE, passes_film=True, mix_weights=mix_weights)
+EDF_NODE = Node("unbounded_mix_edf", "edf", "mix", EDF_SIGNATURE, mix_weights=mix_weights)
+UnboundedMix = mix_class("UnboundedMix", "unbounded_mix", NODE, False, False,
                          module=__name__)
-ColorUnboundedMix = mix_class("ColorUnboundedMix", "color_unbounded_mix", O_UNBOUNDED_MIX,
+ColorUnboundedMix = mix_class("ColorUnboundedMix", "color_unbounded_mix", NODE,
                               True, False, module=__name__)
-UnboundedMixEdf = mix_class("UnboundedMixEdf", "unbounded_mix", O_UNBOUNDED_MIX_EDF, False,
+UnboundedMixEdf = mix_class("UnboundedMixEdf", "unbounded_mix", EDF_NODE, False,
                             True, module=__name__)
 ColorUnboundedMixEdf = mix_class("ColorUnboundedMixEdf", "color_unbounded_mix",
-                                 O_UNBOUNDED_MIX_EDF, True, True, module=__name__)
+                                 EDF_NODE, True, True, module=__name__)
 
-UnboundedMixVdf = mix_class("UnboundedMixVdf", "unbounded_mix", O_UNBOUNDED_MIX, False, False,
+UnboundedMixVdf = mix_class("UnboundedMixVdf", "unbounded_mix", NODE, False, False,
                       module=__name__, vdf=True)
-ColorUnboundedMixVdf = mix_class("ColorUnboundedMixVdf", "color_unbounded_mix", O_UNBOUNDED_MIX,
+ColorUnboundedMixVdf = mix_class("ColorUnboundedMixVdf", "color_unbounded_mix", NODE,
                            True, False, module=__name__, vdf=True)
 
 
@@ -86,3 +89,8 @@ def color_unbounded_mix(components):
     """``df::color_unbounded_mix``: per-channel weights, not normalised."""
     return mix_dispatch(components, ColorUnboundedMix, ColorUnboundedMixEdf,
                         ColorUnboundedMixVdf)
+
+
+DF = Df("unbounded_mix", SIGNATURE, (NODE, EDF_NODE), constructor=unbounded_mix)
+COLOR_DF = Df("color_unbounded_mix", COLOR_SIGNATURE, (NODE, EDF_NODE),
+              constructor=color_unbounded_mix)

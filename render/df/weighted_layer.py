@@ -26,9 +26,9 @@ the sampler really draws from.
 
 from __future__ import annotations
 
+from render.df._registry import Df, Node
 from render.df._signature import Param, Signature
 from render.jit import njit
-from render.program import O_WEIGHTED_LAYER, df_class
 
 __all__ = [
     "WeightedLayer",
@@ -117,9 +117,12 @@ def curve_is_one(P, row, b, flags):
 
 # --- the Python classes ----------------------------------------------------------------
 
-WeightedLayer = df_class("WeightedLayer", "weighted_layer", O_WEIGHTED_LAYER, SIGNATURE,
-                         module=__name__)
+NODE = Node("weighted_layer", "bsdf", "layer", COLOR_SIGNATURE, directional=False, passes_film=True,
+            layer_factors=layer_factors, layer_estimates=layer_estimates,
+            layer_possible=layer_possible, curve_constant=curve_constant)
+DF = Df("weighted_layer", SIGNATURE, (NODE,))
+COLOR_DF = Df("color_weighted_layer", COLOR_SIGNATURE, (NODE,))
+WeightedLayer = DF.cls
 weighted_layer = WeightedLayer
-ColorWeightedLayer = df_class("ColorWeightedLayer", "color_weighted_layer", O_WEIGHTED_LAYER,
-                              COLOR_SIGNATURE, module=__name__)
+ColorWeightedLayer = COLOR_DF.cls
 color_weighted_layer = ColorWeightedLayer

@@ -1,9 +1,10 @@
 """The creases of a displacement written in MDL, for the dicer.
 
-The workbench's built-in pw-curve fields carry ``uv_knots`` (:class:`displacement.fields.
-Field`): the texture coordinates of their profile's breakpoints, where the dicer puts
-grid lines and splits shading normals.  MDL has no such notion, so for a displacement
-written in MDL they are found in its code (:func:`uv_knots`):
+The workbench's built-in pw-curve fields carry ``uv_knots``
+(:class:`displacement.fields.Field`): the texture coordinates of their profile's
+breakpoints, where the dicer puts grid lines and splits shading normals.  MDL has no
+such notion, so for a displacement written in MDL they are found in its code
+(:func:`uv_knots`):
 
 * **which profiles**: every ``pw_curve::pw_point[N]`` constant the displacement can
   reach -- passed to it as a material-level value, or named in the bodies of the

@@ -12,9 +12,9 @@ import trimesh
 from displacement.surfaces import Cube, MeshSurface, Plane, UVSphere
 from render import material as M
 from render.camera import Camera
+from render.df._kernel_common import fresnel_dielectric
 from render.integrator import Integrator, render
 from render.lights import ConstantEnvironment, PointLight
-from render.numerics import fresnel_dielectric
 from render.scene import RenderSettings, Scene, SceneObject, emissive_material, make_transform
 
 
@@ -56,7 +56,7 @@ def down_camera(res=16, ortho=0.5):
 
 
 def fresnel(cos, eta):
-    return float(fresnel_dielectric(np.array([cos]), eta)[0][0])
+    return fresnel_dielectric(float(cos), float(eta))[0]
 
 
 def mean_err(img):

@@ -411,16 +411,16 @@ def _thin_pane_stage():
     interface, no refraction: reflects F, passes 1 - F).  Mitsuba's thindielectric sums
     the reflections inside a slab (R' = 2R / (1 + R)); with its IOR chosen so that
     R'(45 deg) = F(45 deg, 1.5) the two panes are the same for every camera ray."""
-    from render.numerics import fresnel_dielectric
+    from render.df._kernel_common import fresnel_dielectric
 
     ours, mdict, cam = _stage("diffuse", (0.8, 0.3, 0.2))
     cos45 = np.cos(np.pi / 4)
-    r1 = float(fresnel_dielectric(np.array([cos45]), 1.5)[0][0])
+    r1 = fresnel_dielectric(float(cos45), 1.5)[0]
     r2 = r1 / (2.0 - r1)
     lo, hi = 1.0, 1.5  # bisection: F(45 deg, ior) = r2
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if fresnel_dielectric(np.array([cos45]), mid)[0][0] < r2 else (lo, mid)
+        lo, hi = (mid, hi) if fresnel_dielectric(float(cos45), mid)[0] < r2 else (lo, mid)
     ior2 = 0.5 * (lo + hi)
     origin, target = np.array([0.0, 1.5, 3.5]), np.array([0.0, 0.4, 0.0])
     d = (target - origin) / np.linalg.norm(target - origin)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from render.bsdf import Bsdf
-from render.numerics import refract
+from render.df._kernel_common import refract
 from render.testing import (
     chi2_test,
     consistency_error,
@@ -191,8 +191,8 @@ def check_chi2(case: DfCase, theta_phi, test_count: int) -> None:
 def _refracted(wo: np.ndarray, eta_out: float, eta_in: float) -> np.ndarray:
     side = 1.0 if wo[2] >= 0 else -1.0
     e1, e2 = (eta_out, eta_in) if side > 0 else (eta_in, eta_out)
-    k2, tir = refract(wo[None], np.array([[0.0, 0.0, side]]), e1 / e2)
-    return np.array([0.0, 0.0, -side]) if tir[0] else k2[0]
+    x, y, z, tir = refract(*wo, 0.0, 0.0, side, e1 / e2)
+    return np.array([0.0, 0.0, -side]) if tir else np.array([x, y, z])
 
 
 def integrate(case: DfCase, bsdf: Bsdf, wo: np.ndarray, f: Callable) -> np.ndarray:

@@ -23,9 +23,9 @@ from render_df_cases import (
 )
 
 from render import df
+from render.df._kernel_common import fresnel_dielectric
 from render.df.fresnel_factor import fresnel_conductor
 from render.df.thin_film import film_reflectance, film_rgb
-from render.numerics import fresnel_dielectric
 from render.testing import direction
 
 D, G, S = df.diffuse_reflection_bsdf, df.microfacet_ggx_smith_bsdf, df.specular_bsdf
@@ -80,9 +80,9 @@ def test_airy_limits(c):
     # no film: the bare interface; a film of the substrate's index: the top interface;
     # a conductor substrate without film: the conductor's reflectance
     for n2 in (1.33, 1.5, 2.4):
-        bare = float(fresnel_dielectric(np.array([c]), n2)[0][0])
+        bare = fresnel_dielectric(c, n2)[0]
         assert film_reflectance(c, 1.0, 1.4, n2, 0.0, 0.0, 550.0) == pytest.approx(bare, abs=1e-12)
-        top = float(fresnel_dielectric(np.array([c]), 1.7)[0][0])
+        top = fresnel_dielectric(c, 1.7)[0]
         assert film_reflectance(c, 1.0, 1.7, 1.7, 0.0, 321.0, 550.0) == pytest.approx(top,
                                                                                     abs=1e-12)
     assert film_reflectance(c, 1.0, 1.3, 0.18, 3.42, 0.0, 600.0) == pytest.approx(
@@ -103,7 +103,7 @@ def test_colours():
     # a vanishing film gives the bare Fresnel term in every channel (white balance), a
     # 400 nm soap film over water is coloured
     rgb = np.array(film_rgb(0.9, 1.0, 1.33, 1.33, 1.33, 1.5, 1.5, 1.5, 0.0, 0.0, 0.0, 1e-9))
-    assert np.allclose(rgb, float(fresnel_dielectric(np.array([0.9]), 1.5)[0][0]), atol=1e-9)
+    assert np.allclose(rgb, fresnel_dielectric(0.9, 1.5)[0], atol=1e-9)
     rgb = np.array(film_rgb(1.0, 1.0, 1.33, 1.33, 1.33, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 400.0))
     assert rgb.max() - rgb.min() > 0.02
 
@@ -269,7 +269,7 @@ def test_film_changes_the_curve_layer_weight_as_its_fresnel_predicts(theta):
     u2 = np.array([[0.5, 0.5]])
     s0, s1 = bare.sample(wo, np.array([0.3]), u2), filmed.sample(wo, np.array([0.3]), u2)
     assert s0.weight[0] == pytest.approx(w * schlick(c, 0.04), rel=1e-12)
-    fresnel = float(fresnel_dielectric(np.array([c]), 1.5)[0][0])
+    fresnel = fresnel_dielectric(c, 1.5)[0]
     film_f = np.array(film_rgb(c, 1.0, nf, nf, nf, 1.5, 1.5, 1.5, 0.0, 0.0, 0.0, d))
     assert np.allclose(s1.weight[0], w * np.clip(schlick(c, 0.04) + film_f - fresnel, 0, 1),
                        rtol=1e-9, atol=1e-12)
@@ -317,7 +317,7 @@ def test_substrates_reproduce_the_curve_at_normal_incidence():
     # normal incidence (the conductor: R0 pulled into [0.01, 0.99], as libbsdf)
     for r0 in (0.0, 0.02, 0.04, 0.3, 0.7, 0.98):
         n = schlick_ior(r0)
-        assert float(fresnel_dielectric(np.array([1.0]), n)[0][0]) == pytest.approx(r0, abs=1e-12)
+        assert fresnel_dielectric(1.0, float(n))[0] == pytest.approx(r0, abs=1e-12)
         for g in (0.0, 0.5, 1.0):
             n, k = edge_tint_ior(r0, g)
             assert fresnel_conductor(1.0, n, k) == pytest.approx(0.01 + 0.98 * r0, abs=1e-9)
