@@ -534,8 +534,9 @@ DF_SIGNATURES = _df_signatures()
 #: MDL names with several overloads: name -> the DF_SIGNATURES keys of its overloads, in
 #: the order a call tries them (the first whose parameters take the arguments)
 OVERLOADS = MappingProxyType(registry().overloads())
-#: the MDL name of each overload key
-MDL_NAMES = MappingProxyType({k: name for name, keys in OVERLOADS.items() for k in keys})
+#: the MDL name of each key that is not MDL's name (another overload of that name)
+MDL_NAMES = MappingProxyType({k: d.mdl_name for k, d in registry().dfs.items()
+                              if d.mdl_name != k})
 
 _KIND_TYPES = {"bsdf": BsdfArg, "edf": EdfArg, "vdf": VdfArg,
                "hair_bsdf": Annotated[Any, MdlType("hair_bsdf")]}

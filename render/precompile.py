@@ -49,13 +49,14 @@ KERNEL_ARGS = {
 
 
 def df_kernels() -> list:
-    """The kernels of :mod:`render.df` the interpreter calls, in its dispatch order."""
-    from numba.core.dispatcher import Dispatcher
+    """The kernels of the declared dfs (:mod:`render.df._registry`) that the interpreter
+    calls, in its dispatch's order (by opcode, then phase)."""
+    from render.df._registry import registry
 
-    from render import interpreter
-
-    return [v for v in vars(interpreter).values()
-            if isinstance(v, Dispatcher) and v.py_func.__module__.startswith("render.df.")]
+    out = []
+    for node in registry().nodes:
+        out += [k for k in node.kernels.values() if k not in out]
+    return out
 
 
 def kernel_signature(kernel) -> tuple:

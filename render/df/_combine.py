@@ -1,9 +1,10 @@
 """What the combiners' Python classes share: child checks and the fast albedo estimate.
 
-The combiners' semantics (selection by a defensive mixture of expected contributions,
-one descent and one evaluation per sample, the albedo's control variates) are the
-interpreter's, :mod:`render.interpreter`; each combiner's factors are kernels in its own
-module.
+What each combiner does in each phase (selection by a defensive mixture of expected
+contributions, one descent and one evaluation per sample, the albedo's control
+variates) is written in its role's module, :mod:`render.df._layer`, :mod:`render.df._mix`
+and :mod:`render.df._modifier`, which :mod:`render.interpreter` compiles; each
+combiner's factors are kernels in its own module.
 """
 
 from __future__ import annotations

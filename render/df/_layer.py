@@ -88,9 +88,40 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from render.df import _kernel_common as kc
 from render.df._signature import THIN_WALLED
+from render.df._workspace import (
+    AGO,
+    AL,
+    CH,
+    CO,
+    CW,
+    FR,
+    FWI,
+    FWO,
+    KF,
+    KON,
+    KR,
+    KSEL,
+    NO_KID,
+    PDF,
+    SEL,
+    R,
+    agree,
+    any_pos,
+    chat_lookup,
+    clamp_u,
+    lum,
+    selection,
+    set_bases,
+    set_dirs,
+    to_frame0,
+    work_size,
+)
 from render.jit import njit
+from render.program import BASE, CHAT_NONE, CHAT_THETA, FLAGS, FRAME, KID0, LFRAME, OP, TABLE
 
 __all__ = [
     "measured_curve1",
@@ -107,8 +138,8 @@ __all__ = [
 # --- scalar kernels shared by the layers and directional_factor (the compiled core) ---
 # The per-node factor math of weighted_layer, fresnel_layer, custom_curve_layer (and their
 # colour forms) lives in those modules; these are the pieces they share: the direction
-# geometry of CurveLayer._curves and the Fresnel and F82 curves, ported formula by
-# formula (same operations in the same order) on render.df._kernel_common's helpers.
+# geometry of the curve layers and the Fresnel and F82 curves, on
+# render.df._kernel_common's helpers.
 
 #: 7^7 / 6^6: normalises Hoffman's F82 term to its peak at c = 1/7
 _F82_NORM = 7.0**7 / 6.0**6
@@ -261,3 +292,287 @@ def scale_half_vector(wox, woy, woz, wix, wiy, wiz):
 def scale_cosine(wox, woy, woz, wix, wiy, wiz):
     """``wo.h`` of :func:`scale_half_vector` (-1 where negative)."""
     return scale_half_vector(wox, woy, woz, wix, wiy, wiz)[0]
+
+
+# --- what a layer node does in each phase of the interpreter -------------------------
+# Templates that render.interpreter compiles with ``dispatch`` (the registry's generated
+# dispatch) and ``walker`` (the interpreter itself) bound (render.jit.instantiate).  A
+# layer's children are ``kids[k0]`` (the layer, chosen with probability SEL) and
+# ``kids[k0 + 1]`` (the base); registers: render.df._workspace.
+
+#: bound by render.interpreter: the generated dispatch (render.df._registry)
+dispatch = None
+#: bound by render.interpreter: the interpreter, whose passes a layer calls back
+walker = None
+
+
+def lobe_white_albedo(code, kids, P, row, tables, k, w):
+    """The white albedo ``E(w)`` of layer ``k``'s lobe (its layer child, e.g. a
+    ``sheen_bsdf`` leaf) from the lobe's own table: the Ĉ of a layer that declares
+    ``chat_from_lobe`` (the sheen layer's ``1 - max(E(wo), E(wi))``)."""
+    lay = kids[code[k, KID0]]
+    if lay < 0:
+        return 0.0
+    e = dispatch.white_albedo(code[lay, OP], P, row, code[lay, BASE], code[lay, FLAGS], w[0],
+                              w[1], w[2], tables, code[lay, TABLE])
+    return min(max(e, 0.0), 1.0)
+
+
+def chat(code, kids, P, row, tables, k, wl, agrees):
+    """Ĉ of layer ``k`` at a layer-frame direction ``wl``: from its table, or its
+    lobe's white albedo, or 0 (no table, or ``wl`` off the frames' common side)."""
+    t = code[k, TABLE]
+    if t != CHAT_NONE and agrees:
+        return chat_lookup(tables, t, wl[0], wl[1], wl[2])
+    if dispatch.CHAT_FROM_LOBE[code[k, OP]] and agrees:
+        e = walker.lobe_white_albedo(code, kids, P, row, tables, k, wl)
+        return e, e, e
+    return 0.0, 0.0, 0.0
+
+
+def prepare(code, kids, frames, P, tables, row, ws, k, ko, fo, wo):
+    """Layer ``k`` at ``wo``: Ĉ(wo), whether ``wo`` agrees with the layer frame, the
+    choice between layer and base (a defensive mixture of their expected contributions:
+    the factors' estimates times the children's cheap albedos) and its cheap albedo."""
+    op, b, fl, t = code[k, OP], code[k, BASE], code[k, FLAGS], code[k, TABLE]
+    r = k * R
+    k0 = code[k, KID0]
+    lf = fo + code[k, LFRAME] * FR
+    wol = ws[lf + FWO:lf + FWO + 3]
+    ago = agree(code[k, LFRAME] == code[k, FRAME], wo, wol)
+    ws[r + CO], ws[r + CO + 1], ws[r + CO + 2] = walker.layer_chat(code, kids, P, row, tables,
+                                                                  k, wol, ago)
+    ws[r + AGO] = 1.0 if ago else 0.0
+    el0, el1, el2, eb0, eb1, eb2 = dispatch.layer_estimates(op, P, row, b, fl, wo, wol,
+                                                            ws[r + CO:r + CO + 3], tables, t)
+    pos_l, pos_b = dispatch.layer_possible(op, P, row, b, fl, tables, t)
+    lay, bas = kids[k0], kids[k0 + 1]
+    al0 = al1 = al2 = ab0 = ab1 = ab2 = 0.0
+    if lay != NO_KID:
+        q = lay * R + CH
+        al0, al1, al2 = ws[q], ws[q + 1], ws[q + 2]
+    else:
+        pos_l = False
+    if bas != NO_KID:
+        q = bas * R + CH
+        ab0, ab1, ab2 = ws[q], ws[q + 1], ws[q + 2]
+    else:
+        pos_b = False
+    pos_l = pos_l and ago
+    ka, kb = ko + k0 * KR, ko + (k0 + 1) * KR
+    ws[ka + KSEL] = lum(el0 * al0, el1 * al1, el2 * al2)
+    ws[kb + KSEL] = lum(eb0 * ab0, eb1 * ab1, eb2 * ab2)
+    ws[ka + KON] = 1.0 if pos_l else 0.0
+    ws[kb + KON] = 1.0 if pos_b else 0.0
+    selection(ws, ko, k0, 2)
+    ws[r + SEL] = ws[ka + KSEL]
+    g = 1.0 if ago else 0.0
+    ws[r + CH] = el0 * al0 * g + eb0 * ab0
+    ws[r + CH + 1] = el1 * al1 * g + eb1 * ab1
+    ws[r + CH + 2] = el2 * al2 * g + eb2 * ab2
+
+
+def factors(code, kids, P, row, tables, ws, k, fo, wo, wi):
+    """Layer ``k``'s factors ``(f_layer, f_base)`` at ``wi`` (its frames' registers
+    set), after :func:`prepare` at ``wo``: the layer factor masked where a direction
+    leaves the two tangent planes' common side; Ĉ(wi) kept in its register."""
+    r = k * R
+    lf = fo + code[k, LFRAME] * FR
+    wol = ws[lf + FWO:lf + FWO + 3]
+    wil = ws[lf + FWI:lf + FWI + 3]
+    agi = agree(code[k, LFRAME] == code[k, FRAME], wi, wil)
+    ws[r + CW], ws[r + CW + 1], ws[r + CW + 2] = walker.layer_chat(code, kids, P, row, tables,
+                                                                  k, wil, agi)
+    fl0, fl1, fl2, fb0, fb1, fb2 = dispatch.layer_factors(
+        code[k, OP], P, row, code[k, BASE], code[k, FLAGS], wo, wi, wol, wil,
+        ws[r + CO:r + CO + 3], ws[r + CW:r + CW + 3], tables, code[k, TABLE])
+    if not (ws[r + AGO] > 0.0 and agi):
+        fl0 = fl1 = fl2 = 0.0
+    return fl0, fl1, fl2, fb0, fb1, fb2
+
+
+def evaluate(code, kids, frames, P, tables, row, ws, k, ko, fo, wo, wi):
+    """Layer ``k`` at ``wi`` after its children: ``f_layer layer + f_base base`` and the
+    pdf of the mixture of the children's samplers -> ``(v0, v1, v2, pdf)``; each
+    child's factor and whether it contributes in its registers."""
+    k0 = code[k, KID0]
+    fl0, fl1, fl2, fb0, fb1, fb2 = walker.layer_factors(code, kids, P, row, tables, ws, k, fo,
+                                                        wo, wi)
+    P_l = ws[k * R + SEL]
+    ka, kb = ko + k0 * KR, ko + (k0 + 1) * KR
+    ws[ka + KF], ws[ka + KF + 1], ws[ka + KF + 2] = fl0, fl1, fl2
+    ws[kb + KF], ws[kb + KF + 1], ws[kb + KF + 2] = fb0, fb1, fb2
+    lay, bas = kids[k0], kids[k0 + 1]
+    cl0 = cl1 = cl2 = cb0 = cb1 = cb2 = pl = pb = 0.0
+    if lay != NO_KID:
+        q = lay * R
+        cl0, cl1, cl2 = fl0 * ws[q], fl1 * ws[q + 1], fl2 * ws[q + 2]
+        pl = ws[q + PDF]
+    if bas != NO_KID:
+        q = bas * R
+        cb0, cb1, cb2 = fb0 * ws[q], fb1 * ws[q + 1], fb2 * ws[q + 2]
+        pb = ws[q + PDF]
+    on_l = any_pos(cl0, cl1, cl2)
+    on_b = any_pos(cb0, cb1, cb2)
+    ws[ka + KON] = 1.0 if on_l else 0.0
+    ws[kb + KON] = 1.0 if on_b else 0.0
+    pdf = (P_l * pl if on_l else 0.0) + ((1.0 - P_l) * pb if on_b else 0.0)
+    return cl0 + cb0, cl1 + cb1, cl2 + cb2, pdf
+
+
+def choose(code, ws, k, ko, u1):
+    """The child a sample descends to -> ``(kid slot, u1 rescaled)``: the layer with
+    probability SEL, else the base."""
+    k0 = code[k, KID0]
+    p = ws[k * R + SEL]
+    if u1 < p:
+        return k0, clamp_u(u1 / p if p > 0.0 else 0.0)
+    return k0 + 1, clamp_u((u1 - p) / (1.0 - p) if p < 1.0 else 0.0)
+
+
+def settle(code, ws, k, ko, j):
+    """A delta sample through kid slot ``j``: ``(probability of the choice, factor)``."""
+    o = ko + j * KR
+    p = ws[k * R + SEL]
+    return p if j == code[k, KID0] else 1.0 - p, ws[o + KF], ws[o + KF + 1], ws[o + KF + 2]
+
+
+def factor_at(code, kids, frames, P, tables, row, ws, k, which, f0, f1, x, y, z):
+    """Layer ``k``'s factor of its child ``which`` (0 the layer, 1 the base) at
+    ``wi = (x, y, z)`` (frame ``f0``), after :func:`prepare` at ``wo``."""
+    fo = code.shape[0] * R + kids.shape[0] * KR
+    set_dirs(frames, ws, fo, f0, f1, FWI, x, y, z)
+    fr = fo + code[k, FRAME] * FR
+    a = walker.layer_factors(code, kids, P, row, tables, ws, k, fo, ws[fr + FWO:fr + FWO + 3],
+                             ws[fr + FWI:fr + FWI + 3])
+    if which == 0:
+        return a[0], a[1], a[2]
+    return a[3], a[4], a[5]
+
+
+def albedo(code, kids, frames, P, tables, row, ws, k, ko, fo, f0, f1, points, ox, oy, oz, wo):
+    """Layer ``k``'s directional albedo at ``wo``, from its children's (``AL``): the
+    factors' estimates at ``wo`` times the children's albedos, plus, where the factors
+    vary over ``wi``, the integral of their deviation through each child's sampler
+    (:func:`render.interpreter.correction`); a mirror base takes its factor at the
+    mirror direction.  Clipped to [0, 1]: a layer never gains energy."""
+    op = code[k, OP]
+    r = k * R
+    k0 = code[k, KID0]
+    lay, bas = kids[k0], kids[k0 + 1]
+    lf = fo + code[k, LFRAME] * FR
+    wol = ws[lf + FWO:lf + FWO + 3]
+    el0, el1, el2, eb0, eb1, eb2 = dispatch.layer_estimates(
+        op, P, row, code[k, BASE], code[k, FLAGS], wo, wol, ws[r + CO:r + CO + 3], tables,
+        code[k, TABLE])
+    if not ws[r + AGO] > 0.0:
+        el0 = el1 = el2 = 0.0
+    identity = code[k, LFRAME] == code[k, FRAME]
+    directional = dispatch.DIRECTIONAL[op]
+    a0 = a1 = a2 = 0.0
+    if lay != NO_KID:
+        q = lay * R + AL
+        a0, a1, a2 = el0 * ws[q], el1 * ws[q + 1], el2 * ws[q + 2]
+        if not (identity and (not directional or walker.is_mirror(code, lay))):
+            d0, d1, d2 = walker.correction(code, kids, frames, P, tables, row, ws, k, lay, 0,
+                                           el0, el1, el2, f0, f1, ox, oy, oz, points)
+            a0, a1, a2 = a0 + d0, a1 + d1, a2 + d2
+    if bas != NO_KID:
+        q = bas * R + AL
+        if directional and walker.is_mirror(code, bas):
+            walker.prepare(code, kids, frames, P, tables, row, ws, k, k, f0, f1, ox, oy, oz)
+            m0, m1, m2 = walker.layer_factor_at(code, kids, frames, P, tables, row, ws, k, 1,
+                                                f0, f1, -ox, -oy, oz)
+            a0, a1, a2 = a0 + m0 * ws[q], a1 + m1 * ws[q + 1], a2 + m2 * ws[q + 2]
+        else:
+            a0, a1, a2 = a0 + eb0 * ws[q], a1 + eb1 * ws[q + 1], a2 + eb2 * ws[q + 2]
+            if directional:
+                d0, d1, d2 = walker.correction(code, kids, frames, P, tables, row, ws, k, bas,
+                                               1, eb0, eb1, eb2, f0, f1, ox, oy, oz, points)
+                a0, a1, a2 = a0 + d0, a1 + d1, a2 + d2
+    return min(max(a0, 0.0), 1.0), min(max(a1, 0.0), 1.0), min(max(a2, 0.0), 1.0)
+
+
+def build_chat_table(code, kids, frames, P, tables, row, k, dirs, points, out):
+    """The Ĉ table of curve layer ``k`` (both sides; compiled by the interpreter as
+    :func:`render.interpreter.build_chat_table`): ``out`` (2, 2, THETA, 3) gets per
+    side the node values (largest over the azimuths of ``dirs``) and the concave pad.
+
+    ``dirs`` (2, THETA * PHI, 3): the layer-frame table directions of each side;
+    ``points`` (m, 3) the Sobol points.  The layer child is sampled in its own frame;
+    with an elemental layer ``C(nk) albedo_L`` is the control variate.
+    """
+    ws = np.empty(work_size(code.shape[0], kids.shape[0], frames.shape[0]))
+    n = code.shape[0]
+    ko = n * R
+    fo = ko + kids.shape[0] * KR
+    nf = frames.shape[0]
+    op = code[k, OP]
+    b = code[k, BASE]
+    fl = code[k, FLAGS]
+    lay = kids[code[k, KID0]]
+    lframe = code[k, LFRAME]
+    controlled = dispatch.ROLE[code[lay, OP]] == 0  # an elemental layer
+    theta = CHAT_THETA
+    nd = dirs.shape[1]
+    phi = nd // theta
+    m = points.shape[0]
+    set_bases(frames, P, row, ws, fo, 0, nf)
+    for side in range(2):
+        for t in range(theta):
+            for c in range(3):
+                out[side, 0, t, c] = 0.0
+        for d in range(nd):
+            vx, vy, vz = dirs[side, d, 0], dirs[side, d, 1], dirs[side, d, 2]
+            # the direction in frame 0, for the subtree's own frames
+            gx, gy, gz = to_frame0(frames, ws, fo, lframe, vx, vy, vz)
+            n0, n1, n2 = dispatch.curve_nk(op, P, row, b, fl, vx, vy, vz, tables, code[k, TABLE])
+            s0 = s1 = s2 = 0.0
+            for i in range(m):
+                s = walker.sample(code, kids, frames, P, tables, row, ws, lay, 0, nf, gx, gy, gz,
+                           points[i, 0], points[i, 1], points[i, 2], False)
+                if s[7] == 0:
+                    continue
+                fx, fy, fz = s[0], s[1], s[2]
+                # back into the layer frame
+                lf = fo + lframe * FR
+                if lframe > 0:
+                    set_dirs(frames, ws, fo, 0, nf, FWI, fx, fy, fz)
+                    fx, fy, fz = ws[lf + FWI], ws[lf + FWI + 1], ws[lf + FWI + 2]
+                h0, h1, h2 = dispatch.curve_h(op, P, row, b, fl, vx, vy, vz, fx, fy, fz, tables,
+                                     code[k, TABLE])
+                if controlled:
+                    h0, h1, h2 = h0 - n0, h1 - n1, h2 - n2
+                s0 += h0 * s[4]
+                s1 += h1 * s[5]
+                s2 += h2 * s[6]
+            c0, c1, c2 = s0 / m, s1 / m, s2 / m
+            if controlled:
+                a0, a1, a2 = dispatch.albedo(code[lay, OP], P, row, code[lay, BASE],
+                                         code[lay, FLAGS], vx, vy, vz, tables,
+                                         code[lay, TABLE])
+                c0, c1, c2 = c0 + n0 * a0, c1 + n1 * a1, c2 + n2 * a2
+            if not abs(vz) > 0.0:
+                c0 = c1 = c2 = 0.0
+            t = d // phi
+            out[side, 0, t, 0] = max(out[side, 0, t, 0], min(max(c0, 0.0), 1.0))
+            out[side, 0, t, 1] = max(out[side, 0, t, 1], min(max(c1, 0.0), 1.0))
+            out[side, 0, t, 2] = max(out[side, 0, t, 2], min(max(c2, 0.0), 1.0))
+        # the concave correction of each interval (second differences, pole mirrored)
+        for c in range(3):
+            for t in range(theta):
+                out[side, 1, t, c] = 0.0
+            for t in range(theta - 1):
+                d2a = _second_difference(out, side, c, t, theta)
+                d2b = _second_difference(out, side, c, t + 1, theta)
+                out[side, 1, t, c] = 0.5 * max(0.0, -min(d2a, d2b))
+
+
+@njit
+def _second_difference(out, side, c, t, theta):
+    """``v[t-1] - 2 v[t] + v[t+1]`` with the pole mirrored (``v[-1] = v[1]``) and the last
+    node taking its neighbour's value."""
+    if t == theta - 1:
+        t = theta - 2
+    prev = out[side, 0, 1, c] if t == 0 else out[side, 0, t - 1, c]
+    return prev - 2.0 * out[side, 0, t, c] + out[side, 0, t + 1, c]

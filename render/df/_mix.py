@@ -8,7 +8,7 @@ kernel from the MDL weights (normalised, clamped or unbounded)::
     eval = sum_i w_i eval_i(wo, wi),      pdf = sum_i p_i pdf_i(wo, wi) [w_i eval_i > 0]
 
 Sampling picks component ``i`` with probability ``p_i`` (a defensive mixture of the
-expected contributions ``w_i albedo_i``, :func:`render.interpreter._selection`; libbsdf
+expected contributions ``w_i albedo_i``, :func:`render.df._workspace.selection`; libbsdf
 uses ``w_i / sum(w)``), reuses ``u1`` rescaled, and returns ``weight = eval / pdf``
 (delta events: ``w_i weight_i / p_i``); nested combiners sample in one descent and one
 evaluation of the whole tree (:func:`render.interpreter.sample`).
@@ -37,6 +37,22 @@ from render.df._combine import (
 )
 from render.df._registry import Df
 from render.df._signature import REQUIRED, Param, Signature
+from render.df._workspace import (
+    AL,
+    CH,
+    KON,
+    KR,
+    KSEL,
+    KW,
+    NO_KID,
+    PDF,
+    R,
+    any_pos,
+    clamp_u,
+    lum,
+    selection,
+)
+from render.program import BASE, FLAGS, KID0, NKIDS, OP, TABLE
 
 __all__ = [
     "BSDF_COMPONENT_SIGNATURE",
@@ -239,3 +255,111 @@ def as_components(components, color: bool, mix: str) -> list[BsdfComponent]:
     if any(vdf) and not all(vdf):
         raise ValueError(f"{mix}: components mix vdf and bsdf components; use one kind")
     return out
+
+
+# --- what a mix node does in each phase of the interpreter ---------------------------
+# Templates that render.interpreter compiles with ``dispatch`` bound (render.jit.
+# instantiate).  A mix's components are kid slots ``k0 .. k0 + nk - 1``; registers:
+# render.df._workspace.
+
+#: bound by render.interpreter: the generated dispatch (render.df._registry)
+dispatch = None
+
+
+def prepare(code, kids, P, tables, row, ws, k, ko):
+    """Mix ``k`` at ``wo``: each component's effective weight (the mix's
+    ``mix_weights`` kernel), the choice among them (a defensive mixture of ``w_i
+    albedo_i``; for edf mixes of the weights' luminance, every edf having unit
+    exitance) and the mix's cheap albedo ``sum w_i albedo_i``."""
+    op, b, fl = code[k, OP], code[k, BASE], code[k, FLAGS]
+    k0, nk = code[k, KID0], code[k, NKIDS]
+    edf = dispatch.EDF[op]
+    s0 = s1 = s2 = 0.0
+    for j in range(nk):
+        o = ko + (k0 + j) * KR
+        w0, w1, w2 = dispatch.mix_weights(op, P, row, b, fl, nk, j, tables, code[k, TABLE])
+        ws[o + KW], ws[o + KW + 1], ws[o + KW + 2] = w0, w1, w2
+        c = kids[k0 + j]
+        a0 = a1 = a2 = 0.0
+        if c != NO_KID:
+            q = c * R + CH
+            a0, a1, a2 = ws[q], ws[q + 1], ws[q + 2]
+        ws[o + KSEL] = lum(w0, w1, w2) if edf else lum(w0 * a0, w1 * a1, w2 * a2)
+        ws[o + KON] = 1.0 if (c != NO_KID and any_pos(w0, w1, w2)) else 0.0
+        s0 += w0 * a0
+        s1 += w1 * a1
+        s2 += w2 * a2
+    selection(ws, ko, k0, nk)
+    r = k * R + CH
+    ws[r], ws[r + 1], ws[r + 2] = s0, s1, s2
+
+
+def evaluate(code, kids, ws, k, ko):
+    """Mix ``k`` after its components: ``sum w_i value_i`` and ``sum p_i pdf_i`` over
+    the components that contribute -> ``(v0, v1, v2, pdf)``."""
+    k0 = code[k, KID0]
+    v0 = v1 = v2 = pdf = 0.0
+    for j in range(code[k, NKIDS]):
+        o = ko + (k0 + j) * KR
+        c = kids[k0 + j]
+        if c == NO_KID:
+            ws[o + KON] = 0.0
+            continue
+        q = c * R
+        c0 = ws[o + KW] * ws[q]
+        c1 = ws[o + KW + 1] * ws[q + 1]
+        c2 = ws[o + KW + 2] * ws[q + 2]
+        on = any_pos(c0, c1, c2)
+        ws[o + KON] = 1.0 if on else 0.0
+        v0 += c0
+        v1 += c1
+        v2 += c2
+        if on:
+            pdf += ws[o + KSEL] * ws[q + PDF]
+    return v0, v1, v2, pdf
+
+
+def choose(code, ws, k, ko, u1):
+    """The component a sample descends to -> ``(kid slot, u1 rescaled)``, by the
+    selection probabilities (kid slot -1: none can be chosen)."""
+    k0, nk = code[k, KID0], code[k, NKIDS]
+    last = -1
+    for jj in range(k0, k0 + nk):
+        if ws[ko + jj * KR + KSEL] > 0.0:
+            last = jj
+    if last < 0:
+        return -1, u1
+    j = last
+    cdf = 0.0
+    for jj in range(k0, last + 1):
+        p = ws[ko + jj * KR + KSEL]
+        if u1 < cdf + p and p > 0.0:
+            j = jj
+            break
+        cdf += p
+    p = ws[ko + j * KR + KSEL]
+    before = 0.0
+    for jj in range(k0, j):
+        before += ws[ko + jj * KR + KSEL]
+    return j, clamp_u((u1 - before) / p)
+
+
+def settle(code, ws, k, ko, j):
+    """A delta sample through kid slot ``j``: ``(probability of the choice, weight)``."""
+    o = ko + j * KR
+    return ws[o + KSEL], ws[o + KW], ws[o + KW + 1], ws[o + KW + 2]
+
+
+def albedo(code, kids, ws, k, ko):
+    """Mix ``k``'s directional albedo from its components' (``AL``): ``sum w_i albedo_i``,
+    exact."""
+    k0 = code[k, KID0]
+    a0 = a1 = a2 = 0.0
+    for j in range(code[k, NKIDS]):
+        c = kids[k0 + j]
+        if c != NO_KID:
+            o = ko + (k0 + j) * KR
+            a0 += ws[o + KW] * ws[c * R + AL]
+            a1 += ws[o + KW + 1] * ws[c * R + AL + 1]
+            a2 += ws[o + KW + 2] * ws[c * R + AL + 2]
+    return a0, a1, a2

@@ -206,6 +206,10 @@ class Df:
         (``diffuse_edf``: a constant one is the integrator's plain area light).
     struct : bool
         A mix component's struct (``bsdf_component``): a signature, no program.
+    deprecated : str
+        Why MDL deprecates this overload and what to call instead (an overload that an
+        earlier MDL version declared, kept for modules of that version; ``::df``
+        declares it with ``anno::deprecated``).
     constructor : type or callable
         The Python constructor, where it is not the class that
         :func:`render.program.df_class` derives (a df built of several nodes, a mix's
@@ -226,6 +230,7 @@ class Df:
     unsupported: tuple = ()
     lambertian: bool = False
     struct: bool = False
+    deprecated: str = ""
     constructor: object = field(default=None, repr=False)
     module: str = field(default="", repr=False)
 
@@ -350,11 +355,13 @@ class Registry:
         return self.dfs[key]
 
     def overloads(self) -> dict[str, tuple[str, ...]]:
-        """MDL names declared by several dfs -> their keys, in declaration order (the
-        order a call tries them)."""
+        """MDL names declared by several dfs that are not deprecated -> their keys, in
+        declaration order (the order a Python call tries them; a deprecated overload is
+        for MDL modules of its version, which the MDL front end resolves itself)."""
         by_name: dict[str, list[str]] = {}
         for key, d in self.dfs.items():
-            by_name.setdefault(d.mdl_name, []).append(key)
+            if not d.deprecated:
+                by_name.setdefault(d.mdl_name, []).append(key)
         return {n: tuple(keys) for n, keys in by_name.items() if len(keys) > 1}
 
     def table(self, fact) -> np.ndarray:

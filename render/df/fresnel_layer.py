@@ -93,6 +93,12 @@ COLOR_SIGNATURE = Signature("bsdf", _params(
     Param("ior", "color", REQUIRED),
     Param("weight", "color", (1.0, 1.0, 1.0), clamp=(0.0, 1.0)),
 ), context=("ior_outside", "ior_inside"))
+#: ``df::fresnel_layer`` of MDL before 1.4 (the Handbook's): a colour ior; it packs as
+#: the colour form, whose kernels it runs
+BEFORE_1_4_SIGNATURE = Signature("bsdf", _params(
+    Param("ior", "color", REQUIRED),
+    Param("weight", "float", 1.0, clamp=(0.0, 1.0), packed="color"),
+), context=("ior_outside", "ior_inside"))
 _IOR = COLOR_SIGNATURE.offset("ior")
 _WEIGHT = COLOR_SIGNATURE.offset("weight")
 _IOR_OUTSIDE = COLOR_SIGNATURE.offset("ior_outside")
@@ -172,6 +178,10 @@ NODE = Node("fresnel_layer", "bsdf", "layer", COLOR_SIGNATURE,
             curve_constant=curve_constant)
 DF = Df("fresnel_layer", SIGNATURE, (NODE,), check=check_ior)
 COLOR_DF = Df("color_fresnel_layer", COLOR_SIGNATURE, (NODE,), check=check_ior)
+BEFORE_1_4_DF = Df("fresnel_layer_before_1_4", BEFORE_1_4_SIGNATURE, (NODE,),
+                   mdl_name="fresnel_layer", py_name="FresnelLayerBefore14", check=check_ior,
+                   deprecated="MDL before 1.4: fresnel_layer's ior is a float since; for a "
+                              "colour ior call df::color_fresnel_layer")
 FresnelLayer = DF.cls
 fresnel_layer = FresnelLayer
 ColorFresnelLayer = COLOR_DF.cls

@@ -211,10 +211,6 @@ class Instantiator:
             if kind == "df" and o.name in RESOURCE_QUERIES:
                 return RESOURCE_QUERIES[o.name][2](**kwargs)
             if kind == "df":
-                if o.name == "fresnel_layer" and isinstance(o.params[0].type, T.Color):
-                    from render.materials.chapter6 import fresnel_layer_of
-
-                    return fresnel_layer_of(**kwargs)  # MDL before 1.4
                 return getattr(df, df_key(o))(**kwargs)  # the overload the checker chose
             if kind == "materials":
                 from render.materials import MATERIALS

@@ -162,14 +162,6 @@ def _declare(name: str, function, module: str, qualifier: str = "") -> str:
     return f"export {ret} {name}({', '.join(ps)}){q};"
 
 
-#: MDL before 1.4 (the Handbook's): fresnel_layer took a colour ior
-_FRESNEL_BEFORE_1_4 = (
-    "export bsdf fresnel_layer(color ior, float weight = 1.0, bsdf layer = bsdf(), "
-    "bsdf base = bsdf(), float3 normal = state::normal()) [[ anno::deprecated(\"MDL before "
-    "1.4: fresnel_layer's ior is a float since; for a colour ior call "
-    "df::color_fresnel_layer\") ]];")
-
-
 @cache
 def _df_declarations() -> tuple[str, dict]:
     """``::df``'s text and which render core constructor each declaration is:
@@ -181,6 +173,7 @@ def _df_declarations() -> tuple[str, dict]:
     (:data:`render.material.MDL_NAMES`: ``tint_rt`` is MDL's two-tint ``tint``), and the
     mixers' edf and vdf overloads from the component kinds their array parameter takes
     (:data:`render.material.COMPONENT_KINDS`)."""
+    from render.df._registry import registry
     from render.material import COMPONENT_KINDS, DF_SIGNATURES, MDL_NAMES, _mdl_type_of
 
     out = ["mdl 1.9;", "", "import ::state::*;", "import ::anno::*;", "",
@@ -223,9 +216,9 @@ def _df_declarations() -> tuple[str, dict]:
             if dt is not None:
                 text += f" = {dt.removeprefix('df::')}"  # ::df's own names, unqualified
             ps.append(text)
-        declare(name, key, f"export {kind} {name}({', '.join(ps)});")
-        if key == "fresnel_layer":
-            declare(name, key, _FRESNEL_BEFORE_1_4)
+        why = registry().df(key).deprecated
+        annotation = f' [[ anno::deprecated("{why}") ]]' if why else ""
+        declare(name, key, f"export {kind} {name}({', '.join(ps)}){annotation};")
         arrays = [(p, _mdl_type_of(t).name[:-2]) for p, t, _ in params
                   if _mdl_type_of(t).name[:-2] in COMPONENT_KINDS]
         if len(params) == 1 and arrays:  # a mixer: its edf and vdf overloads
