@@ -1,8 +1,8 @@
 """Benchmark: samples per second of every gallery scene, for this tree and another.
 
 Run ``python benchmarks/gallery_speed.py [--other PATH] [--spp N] [--threads N]
-[--markdown]``.  Each scene is rendered (after a warm-up render that compiles and
-builds) by this checkout's ``render`` and, with ``--other``, by the ``render`` of another
+[--markdown] [--scenes NAME ...]``.  Each scene is rendered (after a warm-up render that
+compiles and builds) by this checkout's ``render`` and, with ``--other``, by the ``render`` of another
 checkout (for example an earlier commit in a ``git worktree``), alternately scene by
 scene in fresh processes, so load on the machine hits both alike.  Prints samples/s, how
 each was rendered (objects shaded per hit in numpy are named), and the ratio.  With
@@ -57,8 +57,15 @@ def main(argv=None) -> int:
                     help="render threads (1: samples per second of CPU time)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--scenes", nargs="+", metavar="NAME",
+                    help="only these gallery scenes (file names without .toml)")
     args = ap.parse_args(argv)
     scenes = sorted((ROOT / "gallery" / "scenes").glob("*.toml"))
+    if args.scenes:
+        missing = sorted(set(args.scenes) - {s.stem for s in scenes})
+        if missing:
+            ap.error(f"no gallery scene {', '.join(missing)} (see gallery/scenes/)")
+        scenes = [s for s in scenes if s.stem in args.scenes]
     if args.quick:
         scenes, args.spp = scenes[:3], 1
     rows = []

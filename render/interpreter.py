@@ -15,9 +15,12 @@ functions): a program is walked in passes over its postorder nodes.
   path: ``eval / pdf`` of the whole tree, or for a delta leaf the product of the factors
   over the selection probabilities.
 
-Which kernel serves a node is decided in one place, the dispatch that
-:mod:`render.df._registry` generates from the df modules' declarations
-(:data:`leaf_eval_pdf`, :data:`leaf_sample`, ...); nothing here names a df.
+The interpreter only walks: which kernel serves a node is decided in one place, the
+dispatch that :mod:`render.df._registry` generates from the df modules' declarations
+(:data:`leaf_eval_pdf`, :data:`leaf_sample`, ...), and what a combiner does in each
+phase is written once in its role's module (:mod:`render.df._layer`,
+:mod:`render.df._mix`, :mod:`render.df._modifier`), compiled here with that dispatch
+bound.  Nothing here names a df or holds a combiner's formula.
 """
 
 from __future__ import annotations
@@ -170,7 +173,8 @@ def prepare(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
 @njit
 def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
     """Every node ``lo..hi`` at ``wi = (x, y, z)`` (frame ``f0``), after :func:`prepare`:
-    its value and pdf (0 both where either is), children first."""
+    its value and pdf (0 both where either is), children first.  An emission program is
+    evaluated with ``wi = wo`` (its edfs and modifiers read ``wo`` alone)."""
     n = code.shape[0]
     ko = n * R
     fo = ko + kids.shape[0] * KR
@@ -181,7 +185,11 @@ def evaluate(code, kids, frames, P, tables, row, ws, lo, hi, f0, f1, x, y, z):
         fr = fo + code[k, FRAME] * FR
         wo = ws[fr + FWO:fr + FWO + 3]
         wi = ws[fr + FWI:fr + FWI + 3]
-        if role == _LEAF:
+        if role == _LEAF and _EDF[op]:  # an emission program: at wo (= wi)
+            v0, v1, v2, pdf = _DISPATCH.edf_eval_pdf(op, P, row, code[k, BASE],
+                                                     code[k, FLAGS], wo[0], wo[1], wo[2],
+                                                     tables, code[k, TABLE])
+        elif role == _LEAF:
             v0, v1, v2, pdf = leaf_eval_pdf(op, P, row, code[k, BASE], code[k, FLAGS], wo[0],
                                             wo[1], wo[2], wi[0], wi[1], wi[2], tables,
                                             code[k, TABLE])
@@ -372,30 +380,10 @@ def albedo(code, kids, frames, P, tables, row, ws, root, f0, f1, points, ox, oy,
 @njit
 def edf_eval_pdf(code, kids, frames, P, tables, row, ws, root, f0, f1, ox, oy, oz):
     """``(e0, e1, e2, pdf)`` of the edf program rooted at ``root`` toward ``wo``
-    (``Edf.eval``, ``Edf.pdf``); an edf modifier's factor is taken at ``wo``."""
-    n = code.shape[0]
-    ko = n * R
-    fo = ko + kids.shape[0] * KR
+    (``Edf.eval``, ``Edf.pdf``)."""
     lo = root - code[root, SIZE] + 1
     prepare(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
-    for k in range(lo, root + 1):
-        op = code[k, OP]
-        role = _ROLE[op]
-        if role == _LEAF:
-            v0, v1, v2, pdf = _DISPATCH.edf_eval_pdf(op, P, row, code[k, BASE],
-                                                     code[k, FLAGS], ox, oy, oz, tables,
-                                                     code[k, TABLE])
-        elif role == _MIX:
-            v0, v1, v2, pdf = _mix_evaluate(code, kids, ws, k, ko)
-        else:
-            fr = fo + code[k, FRAME] * FR
-            wo = ws[fr + FWO:fr + FWO + 3]
-            v0, v1, v2, pdf = _modifier_evaluate(code, kids, P, tables, row, ws, k, ko, wo, wo)
-        if role != _LEAF and not pdf > 0.0:
-            v0 = v1 = v2 = pdf = 0.0
-        r = k * R
-        ws[r + F], ws[r + F + 1], ws[r + F + 2] = v0, v1, v2
-        ws[r + PDF] = pdf
+    evaluate(code, kids, frames, P, tables, row, ws, lo, root, f0, f1, ox, oy, oz)
     r = root * R
     return ws[r + F], ws[r + F + 1], ws[r + F + 2], ws[r + PDF]
 

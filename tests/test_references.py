@@ -391,22 +391,33 @@ def path_missing(path: str, beside: Path) -> bool:
 
 # -- the tests ------------------------------------------------------------------------------
 
+def _dead(text: str, where, folder: Path, resolve_name) -> list[str]:
+    """The dead references of ``text``: ``where(offset)`` names the place,
+    ``resolve_name(target, kind)`` says why a name does not resolve (None: it does)."""
+    dead = []
+    for offset, kind, written, target in references(text):
+        at = f"{where(offset)}: {written}"
+        if kind == "local":
+            dead.append(f"{at}: {FIX_LOCAL}")
+        elif kind == "path":
+            if path_missing(target, folder):
+                dead.append(f"{at}: there is no {target}; {FIX_PATH}")
+        elif why := resolve_name(target, kind):
+            dead.append(f"{at}: {why}; {FIX}")
+    return dead
+
+
 @pytest.mark.parametrize("source", SOURCES)
 def test_docstring_references_resolve(source):
     path = ROOT / source
     dead = []
     for first_line, doc, classes, local_names in _docstrings(path.read_text(encoding="utf-8")):
         text = docstring_text(doc)
-        for offset, kind, written, target in references(text):
-            at = f"{source}:{first_line + _line(text, offset) - 1}: {written}"
-            if kind == "local":
-                dead.append(f"{at}: {FIX_LOCAL}")
-            elif kind == "path":
-                if path_missing(target, path.parent):
-                    dead.append(f"{at}: there is no {target}; {FIX_PATH}")
-            elif why := (resolve(target) if target.split(".")[0] in PACKAGES else
-                         resolve_relative(target, kind, path, classes, local_names)):
-                dead.append(f"{at}: {why}; {FIX}")
+        dead += _dead(text, lambda o, t=text, f=first_line: f"{source}:{f + _line(t, o) - 1}",
+                      path.parent,
+                      lambda target, kind, c=classes, n=local_names: (
+                          resolve(target) if target.split(".")[0] in PACKAGES else
+                          resolve_relative(target, kind, path, c, n)))
     if dead:
         pytest.fail("dead references in docstrings:\n" + "\n".join(dead), pytrace=False)
 
@@ -415,16 +426,8 @@ def test_docstring_references_resolve(source):
 def test_page_references_resolve(page):
     path = ROOT / page
     text = markdown_text(path.read_text(encoding="utf-8"))
-    dead = []
-    for offset, kind, written, target in references(text):
-        at = f"{page}:{_line(text, offset)}: {written}"
-        if kind == "local":
-            dead.append(f"{at}: {FIX_LOCAL}")
-        elif kind == "path":
-            if path_missing(target, path.parent):
-                dead.append(f"{at}: there is no {target}; {FIX_PATH}")
-        elif why := resolve(target):
-            dead.append(f"{at}: {why}; {FIX}")
+    dead = _dead(text, lambda o: f"{page}:{_line(text, o)}", path.parent,
+                 lambda target, kind: resolve(target))
     prose = CODE.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
     for match in LINK.finditer(prose):
         target = match.group(1).split("#")[0]

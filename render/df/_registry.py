@@ -69,7 +69,8 @@ PHASES = MappingProxyType({
     "layer_possible": ("layer", "", "False, False"),
     "curve_h": ("layer", "vx, vy, vz, xx, xy, xz", "0.0, 0.0, 0.0"),
     "curve_nk": ("layer", "vx, vy, vz", "0.0, 0.0, 0.0"),
-    # layers and modifiers: whether the curve takes one value at every cosine
+    # layers and modifiers: whether the curve takes one value at every cosine (a node
+    # without the kernel is taken as varying: a Ĉ table, an albedo correction)
     "curve_constant": ("layer modifier", "", "False"),
     # modifiers: the factor at (wo, wi) (an edf modifier's at wo)
     "scale": ("modifier", "o0, o1, o2, i0, i1, i2", "0.0, 0.0, 0.0"),
@@ -243,10 +244,6 @@ class Df:
             object.__setattr__(self, "py_name",
                                "".join(w.capitalize() for w in self.key.split("_")))
 
-    @property
-    def kind(self) -> str:
-        return self.signature.kind
-
     @functools.cached_property
     def cls(self):
         """The Python class (or constructor) of the df: MDL's parameters as keywords."""
@@ -310,7 +307,7 @@ class Registry:
     order of their declarations)."""
 
     def __init__(self, modules: list[ModuleType]):
-        nodes, dfs, self.modules = [], {}, tuple(modules)
+        nodes, dfs = [], {}
         seen = set()
         for m in modules:
             values = []
@@ -337,8 +334,6 @@ class Registry:
         self._ops = {id(n): i + 1 for i, n in enumerate(nodes)}
         #: key -> Df
         self.dfs = MappingProxyType({k: v for k, (v, _) in dfs.items()})
-        #: key -> the module that declares it
-        self.module_of = MappingProxyType({k: m for k, (_, m) in dfs.items()})
         self._dispatch = None
         self._lock = threading.Lock()
 
