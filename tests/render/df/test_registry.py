@@ -60,6 +60,8 @@ def test_a_node_declares_only_the_phases_of_its_role():
         Node("x", "bsdf", "leaf", sig, scale=None)
     with pytest.raises(ValueError, match="role must be one of"):
         Node("x", "bsdf", "lobe", sig)
+    with pytest.raises(ValueError, match="kind must be bsdf, edf or vdf"):
+        Node("x", "light", "leaf", sig)
 
 
 def test_the_material_layer_knows_exactly_the_declared_dfs():
@@ -130,6 +132,22 @@ def test_no_df_is_named_by_a_string_in_the_render_core():
             continue
         found += [f"render/{rel}:{line}: {s!r}" for line, s in _df_names_compared(path, names)]
     assert found == [], "ask render.df._registry instead of naming a df:\n" + "\n".join(found)
+
+
+def test_a_broken_module_on_the_df_path_is_named_with_its_line(tmp_path):
+    # every pwc command reports it in one line, without a traceback
+    (tmp_path / "broken_bsdf.py").write_text("from render.df._registry import Node\n\n"
+                                             "NODE = Node('broken_bsdf', 'bsdf', 'leaf')\n")
+    env = checkout_env()
+    env["PWC_DF_PATH"] = str(tmp_path)
+    r = subprocess.run([sys.executable, "-m", "pwc", "render", "fig_14_28", "-o", "x.exr"],
+                       env=env, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert r.returncode == 2, r.stderr[-2000:]
+    assert "Traceback" not in r.stderr
+    assert r.stderr.strip() == (
+        f"pwc: error: {tmp_path / 'broken_bsdf.py'}, line 3: the df module on $PWC_DF_PATH "
+        "does not load (TypeError: Node.__init__() missing 1 required positional argument: "
+        "'signature'); fix it, or take its folder off $PWC_DF_PATH")
 
 
 _TOY = '''\
