@@ -257,15 +257,18 @@ class Df:
 
         return df_class(self)
 
-    def _all_lobes(self):
+    def lobes_in(self, mode: str | None = None):
+        """Its lobes in scatter mode ``mode`` (None: in any mode)."""
         from render.bsdf import Lobe
 
-        if isinstance(self.lobes, dict):
-            out = Lobe.NONE
-            for v in self.lobes.values():
-                out |= v
-            return out
-        return Lobe.NONE if self.lobes is None else self.lobes
+        if not isinstance(self.lobes, dict):
+            return Lobe.NONE if self.lobes is None else self.lobes
+        if mode is not None:
+            return self.lobes.get(mode, Lobe.NONE)
+        out = Lobe.NONE
+        for v in self.lobes.values():
+            out |= v
+        return out
 
     @property
     def reads_outside_ior(self) -> bool:
@@ -276,9 +279,7 @@ class Df:
     @property
     def transmits(self) -> bool:
         """Whether it may scatter to the other side (a transmitting lobe)."""
-        from render.bsdf import Lobe
-
-        return bool(self._all_lobes() & Lobe.TRANSMISSION)
+        return self.transmits_in(None)
 
     @property
     def refracts(self) -> bool:
@@ -287,23 +288,20 @@ class Df:
         from render.bsdf import Lobe
 
         return self.reads_outside_ior and bool(
-            self._all_lobes() & (Lobe.GLOSSY_TRANSMISSION | Lobe.SPECULAR_TRANSMISSION))
+            self.lobes_in() & (Lobe.GLOSSY_TRANSMISSION | Lobe.SPECULAR_TRANSMISSION))
 
     def delta_in(self, mode: str) -> bool:
         """Whether every lobe in scatter mode ``mode`` is a delta (specular)."""
         from render.bsdf import Lobe
 
-        lobes = self.lobes.get(mode, Lobe.NONE) if isinstance(self.lobes, dict) else \
-            self._all_lobes()
+        lobes = self.lobes_in(mode)
         return bool(lobes) and not (lobes & ~Lobe.SPECULAR)
 
-    def transmits_in(self, mode: str) -> bool:
-        """Whether it may transmit in scatter mode ``mode``."""
+    def transmits_in(self, mode: str | None) -> bool:
+        """Whether it may transmit in scatter mode ``mode`` (None: in any mode)."""
         from render.bsdf import Lobe
 
-        lobes = self.lobes.get(mode, Lobe.NONE) if isinstance(self.lobes, dict) else \
-            self._all_lobes()
-        return bool(lobes & Lobe.TRANSMISSION)
+        return bool(self.lobes_in(mode) & Lobe.TRANSMISSION)
 
 
 class Registry:
